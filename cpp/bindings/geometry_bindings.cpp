@@ -1,0 +1,256 @@
+// Bindings of cpp/geometry: SE(3)/SO(3), mechanical links, stereo camera, plane fitting.
+// Boxes are in boxes_bindings.cpp.
+#include <pybind11/stl.h>
+
+#include <limits>
+
+#include "bindings/numpy_checks.hpp"
+#include "geometry/link_projection.hpp"
+#include "geometry/plane_fit.hpp"
+#include "geometry/se3.hpp"
+#include "geometry/so3.hpp"
+#include "geometry/stereo_camera.hpp"
+
+namespace twistslam::bindings {
+namespace g = twistslam::geometry;
+using namespace pybind11::literals;
+
+void bind_boxes(py::module_& m);
+
+namespace {
+
+void bind_lie(py::module_& m) {
+  m.def("so3_exp", [](py::handle w) { return to_numpy(g::so3_exp(as_vec3(w, "w"))); }, "w"_a,
+        R"doc(Rotation matrix of a rotation vector (Rodrigues).
+
+Parameters
+----------
+w : (3,) array_like
+    Rotation vector, axis times angle in radians.
+
+Returns
+-------
+(3, 3) ndarray
+)doc");
+  m.def("so3_log", [](py::handle R) { return to_numpy(g::so3_log(as_mat3(R, "R"))); }, "R"_a,
+        "Rotation vector (3,) of a rotation matrix (3, 3), angle in [0, pi]; accurate near pi.");
+  m.def("so3_left_jacobian",
+        [](py::handle w) { return to_numpy(g::so3_left_jacobian(as_vec3(w, "w"))); }, "w"_a,
+        "Left Jacobian J_l(w) (3, 3): exp(w + d) ~= exp(J_l d) exp(w).");
+  m.def("so3_right_jacobian",
+        [](py::handle w) { return to_numpy(g::so3_right_jacobian(as_vec3(w, "w"))); }, "w"_a,
+        "Right Jacobian J_r(w) = J_l(-w) (3, 3): exp(w + d) ~= exp(w) exp(J_r d).");
+  m.def("so3_left_jacobian_inverse",
+        [](py::handle w) { return to_numpy(g::so3_left_jacobian_inverse(as_vec3(w, "w"))); },
+        "w"_a, "Inverse of the SO(3) left Jacobian (3, 3).");
+  m.def("so3_right_jacobian_inverse",
+        [](py::handle w) { return to_numpy(g::so3_right_jacobian_inverse(as_vec3(w, "w"))); },
+        "w"_a, "Inverse of the SO(3) right Jacobian (3, 3).");
+
+  m.def("se3_exp", [](py::handle xi) { return to_numpy(g::se3_exp(as_vec6(xi, "xi"))); },
+        "xi"_a, R"doc(Exponential map of a twist.
+
+Parameters
+----------
+xi : (6,) array_like
+    Twist [v; w], translation part first.
+
+Returns
+-------
+(4, 4) ndarray
+    The rigid transform exp(xi^).
+)doc");
+  m.def("se3_log", [](py::handle T) { return to_numpy(g::se3_log(as_mat4(T, "T"))); }, "T"_a,
+        "Twist (6,) [v; w] of a rigid transform (4, 4); rotation angle in [0, pi].");
+  m.def("se3_inverse", [](py::handle T) { return to_numpy(g::se3_inverse(as_mat4(T, "T"))); },
+        "T"_a, "Inverse (4, 4) of a rigid transform, using R^T.");
+  m.def("se3_compose",
+        [](py::handle A, py::handle B) {
+          return to_numpy(Mat4(as_mat4(A, "A") * as_mat4(B, "B")));
+        },
+        "A"_a, "B"_a, "Composition A @ B of two rigid transforms (4, 4).");
+  m.def("se3_adjoint", [](py::handle T) { return to_numpy(g::se3_adjoint(as_mat4(T, "T"))); },
+        "T"_a, "Adjoint (6, 6) for [v; w] twists: exp(Ad(T) xi) = T exp(xi) T^-1.");
+  m.def("se3_left_jacobian",
+        [](py::handle xi) { return to_numpy(g::se3_left_jacobian(as_vec6(xi, "xi"))); }, "xi"_a,
+        "SE(3) left Jacobian (6, 6): exp(xi + d) ~= exp(J_l d) exp(xi).");
+  m.def("se3_right_jacobian",
+        [](py::handle xi) { return to_numpy(g::se3_right_jacobian(as_vec6(xi, "xi"))); },
+        "xi"_a, "SE(3) right Jacobian (6, 6): exp(xi + d) ~= exp(xi) exp(J_r d).");
+  m.def("se3_left_jacobian_inverse",
+        [](py::handle xi) { return to_numpy(g::se3_left_jacobian_inverse(as_vec6(xi, "xi"))); },
+        "xi"_a, "Inverse of the SE(3) left Jacobian (6, 6).");
+  m.def("se3_right_jacobian_inverse",
+        [](py::handle xi) { return to_numpy(g::se3_right_jacobian_inverse(as_vec6(xi, "xi"))); },
+        "xi"_a, "Inverse of the SE(3) right Jacobian (6, 6).");
+  m.def("twist_between",
+        [](py::handle A, py::handle B) {
+          return to_numpy(g::twist_between(as_mat4(A, "T_a"), as_mat4(B, "T_b")));
+        },
+        "T_a"_a, "T_b"_a, "Twist xi (6,) with T_b = exp(xi) T_a (left, world-frame increment).");
+  m.def("transform_points",
+        [](py::handle T, py::handle X) {
+          const Mat4 M = as_mat4(T, "T");
+          const DoubleArray pts = as_rows(X, "points", 3);
+          DoubleArray out = new_array({pts.shape(0), 3});
+          Eigen::Map<Points3> dst(out.mutable_data(), pts.shape(0), 3);
+          dst = (points_view(pts) * M.topLeftCorner<3, 3>().transpose()).rowwise() +
+                M.topRightCorner<3, 1>().transpose();
+          return out;
+        },
+        "T"_a, "points"_a, "Points (N, 3) mapped by the rigid transform T (4, 4): T @ X.");
+}
+
+void bind_links(py::module_& m) {
+  m.def("projector_free", [] { return to_numpy(g::projector_free()); }, "Mechanical link of a free object: Pi = I (6, 6).");
+  m.def("projector_planar",
+        [](py::handle n) { return to_numpy(g::projector_planar(as_vec3(n, "normal"))); },
+        "normal"_a, R"doc(Mechanical link of an object moving on a plane.
+
+Parameters
+----------
+normal : (3,) array_like
+    Plane normal in the world frame (normalised internally).
+
+Returns
+-------
+(6, 6) ndarray
+    Pi = blockdiag(I - n n^T, n n^T): in-plane translation and rotation about n (3 DoF).
+)doc");
+}
+
+void bind_camera(py::module_& m) {
+  py::class_<g::StereoCamera>(m, "StereoCamera", "Rectified pinhole stereo pair (KITTI P2/P3).")
+      .def_static(
+          "from_kitti",
+          [](py::handle P2, py::handle P3, int w, int h) {
+            try {
+              return g::StereoCamera::from_kitti(as_mat34(P2, "P_left"), as_mat34(P3, "P_right"),
+                                                 w, h);
+            } catch (const std::invalid_argument& e) {
+              throw py::value_error(e.what());
+            }
+          },
+          "P_left"_a, "P_right"_a, "width"_a = 0, "height"_a = 0,
+          "Camera pair from the rectified 3x4 projections of the left and right images.")
+      .def_readonly("fx", &g::StereoCamera::fx)
+      .def_readonly("fy", &g::StereoCamera::fy)
+      .def_readonly("cx", &g::StereoCamera::cx)
+      .def_readonly("cy", &g::StereoCamera::cy)
+      .def_readonly("baseline", &g::StereoCamera::baseline, "metres")
+      .def_readonly("width", &g::StereoCamera::width)
+      .def_readonly("height", &g::StereoCamera::height)
+      .def_property_readonly("t_left", [](const g::StereoCamera& c) { return to_numpy(c.t_left); })
+      .def_property_readonly("t_right", [](const g::StereoCamera& c) { return to_numpy(c.t_right); })
+      .def_property_readonly("K", [](const g::StereoCamera& c) { return to_numpy(c.K()); })
+      .def("project",
+           [](const g::StereoCamera& c, py::handle X, bool right) {
+             const DoubleArray pts = as_rows(X, "points", 3);
+             DoubleArray out = new_array({pts.shape(0), 2});
+             auto src = points_view(pts);
+             const Vec3 offset = right ? c.t_right : c.t_left;
+             for (py::ssize_t i = 0; i < pts.shape(0); ++i) {
+               const Vec3 Xi = src.row(i).transpose();
+               const Vec2 uv = (Xi + offset).z() > 0
+                                   ? (right ? c.project_right(Xi) : c.project(Xi))
+                                   : Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
+               out.mutable_data()[2 * i] = uv.x();
+               out.mutable_data()[2 * i + 1] = uv.y();
+             }
+             return out;
+           },
+           "points"_a, "right"_a = false,
+           "Pixels (N, 2) of points (N, 3) of frame c in the left (or right) image; NaN behind "
+           "the camera.")
+      .def("backproject",
+           [](const g::StereoCamera& c, py::handle uv, py::handle depth) {
+             const DoubleArray px = as_rows(uv, "uv", 2);
+             const DoubleArray d = as_double_array(depth, "depth");
+             if (d.ndim() != 1 || d.shape(0) != px.shape(0))
+               throw py::value_error("depth: expected shape (" + std::to_string(px.shape(0)) +
+                                     ",), got " + shape_string(d));
+             DoubleArray out = new_array({px.shape(0), 3});
+             for (py::ssize_t i = 0; i < px.shape(0); ++i) {
+               const Vec3 X = c.backproject(Vec2(px.data()[2 * i], px.data()[2 * i + 1]), d.data()[i]);
+               for (int k = 0; k < 3; ++k) out.mutable_data()[3 * i + k] = X[k];
+             }
+             return out;
+           },
+           "uv"_a, "depth"_a, "Points (N, 3) in frame c at left pixels (N, 2) and depths (N,).")
+      .def("triangulate",
+           [](const g::StereoCamera& c, py::handle uv, py::handle disparity) {
+             const DoubleArray px = as_rows(uv, "uv", 2);
+             const DoubleArray d = as_double_array(disparity, "disparity");
+             if (d.ndim() != 1 || d.shape(0) != px.shape(0))
+               throw py::value_error("disparity: expected shape (" + std::to_string(px.shape(0)) +
+                                     ",), got " + shape_string(d));
+             DoubleArray out = new_array({px.shape(0), 3});
+             for (py::ssize_t i = 0; i < px.shape(0); ++i) {
+               const Vec3 X = c.triangulate(Vec2(px.data()[2 * i], px.data()[2 * i + 1]), d.data()[i]);
+               for (int k = 0; k < 3; ++k) out.mutable_data()[3 * i + k] = X[k];
+             }
+             return out;
+           },
+           "uv_left"_a, "disparity"_a,
+           "Points (N, 3) in frame c from left pixels and disparities u_l - u_r (NaN where <= 0).")
+      .def("__repr__", [](const g::StereoCamera& c) {
+        return "StereoCamera(fx=" + std::to_string(c.fx) + ", baseline=" +
+               std::to_string(c.baseline) + ", size=" + std::to_string(c.width) + "x" +
+               std::to_string(c.height) + ")";
+      });
+}
+
+void bind_plane(py::module_& m) {
+  py::class_<g::PlaneFit>(m, "PlaneFit", "Result of fit_plane_ransac.")
+      .def_property_readonly("plane", [](const g::PlaneFit& f) { return to_numpy(f.plane); },
+                             "(4,) [n, d] with |n| = 1, n.X + d = 0, d >= 0")
+      .def_property_readonly("inliers",
+                             [](const g::PlaneFit& f) {
+                               py::array_t<bool> out(static_cast<py::ssize_t>(f.inliers.size()));
+                               for (size_t i = 0; i < f.inliers.size(); ++i)
+                                 out.mutable_data()[i] = f.inliers[i] != 0;
+                               return out;
+                             })
+      .def_readonly("num_inliers", &g::PlaneFit::num_inliers)
+      .def_readonly("rms", &g::PlaneFit::rms, "metres");
+  m.def("fit_plane_ransac",
+        [](py::handle points, double thr, int iterations, std::uint64_t seed) {
+          const DoubleArray pts = as_rows(points, "points", 3);
+          try {
+            Points3 P = points_view(pts);
+            py::gil_scoped_release release;
+            return g::fit_plane_ransac(P, {thr, iterations, seed});
+          } catch (const std::invalid_argument& e) {
+            throw py::value_error(e.what());
+          }
+        },
+        "points"_a, "inlier_threshold"_a = 0.05, "iterations"_a = 200, "seed"_a = 0,
+        R"doc(Plane through 3D points: RANSAC on 3-point samples, then an SVD refit on inliers.
+
+Parameters
+----------
+points : (N, 3) array_like, N >= 3, finite
+inlier_threshold : float
+    Point-to-plane distance (m) counted as inlier.
+iterations : int
+    RANSAC samples.
+seed : int
+    Seed of the sampler (results are deterministic).
+
+Returns
+-------
+PlaneFit
+)doc");
+}
+
+}  // namespace
+
+void bind_geometry(py::module_& m) {
+  bind_lie(m);
+  bind_links(m);
+  bind_camera(m);
+  bind_plane(m);
+  bind_boxes(m);
+}
+
+}  // namespace twistslam::bindings

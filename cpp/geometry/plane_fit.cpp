@@ -1,0 +1,90 @@
+#include "geometry/plane_fit.hpp"
+
+#include <Eigen/SVD>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+namespace twistslam::geometry {
+namespace {
+
+Vec4 oriented(const Vec3& n, double d) {
+  // Fix the sign so the same plane always comes out the same: camera origin on the + side.
+  return d < 0 ? Vec4(-n.x(), -n.y(), -n.z(), -d) : Vec4(n.x(), n.y(), n.z(), d);
+}
+
+int mark_inliers(const Points3& P, const Vec4& plane, double thr, std::vector<std::uint8_t>* flags) {
+  const Eigen::VectorXd dist = (P * plane.head<3>()).array() + plane.w();
+  int count = 0;
+  for (Eigen::Index i = 0; i < dist.size(); ++i) {
+    const bool in = std::abs(dist[i]) <= thr;
+    if (flags) (*flags)[i] = in;
+    count += in;
+  }
+  return count;
+}
+
+Points3 gather(const Points3& P, const std::vector<std::uint8_t>& flags, int count) {
+  Points3 out(count, 3);
+  int k = 0;
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    if (flags[i]) out.row(k++) = P.row(i);
+  return out;
+}
+
+}  // namespace
+
+Vec4 fit_plane_svd(const Points3& points) {
+  if (points.rows() < 3) throw std::invalid_argument("fit_plane_svd: needs at least 3 points");
+  const Eigen::RowVector3d centroid = points.colwise().mean();
+  const Eigen::MatrixX3d centred = points.rowwise() - centroid;
+  Eigen::JacobiSVD<Eigen::MatrixX3d> svd(centred, Eigen::ComputeThinV);
+  const Vec3 n = svd.matrixV().col(2).normalized();
+  return oriented(n, -n.dot(centroid.transpose()));
+}
+
+PlaneFit fit_plane_ransac(const Points3& points, const PlaneFitOptions& options) {
+  const Eigen::Index n = points.rows();
+  if (n < 3) throw std::invalid_argument("fit_plane_ransac: needs at least 3 points, got " +
+                                         std::to_string(n));
+  if (!points.allFinite()) throw std::invalid_argument("fit_plane_ransac: points contain NaN/inf");
+  if (!(options.inlier_threshold > 0) || options.iterations < 1)
+    throw std::invalid_argument("fit_plane_ransac: inlier_threshold must be > 0, iterations >= 1");
+
+  std::mt19937_64 rng(options.seed);
+  std::uniform_int_distribution<Eigen::Index> pick(0, n - 1);
+  Vec4 best = Vec4::Zero();
+  int best_count = -1;
+  for (int it = 0; it < options.iterations; ++it) {
+    const Vec3 a = points.row(pick(rng)), b = points.row(pick(rng)), c = points.row(pick(rng));
+    const Vec3 normal = (b - a).cross(c - a);
+    const double len = normal.norm();
+    if (len < 1e-12) continue;  // collinear or repeated sample
+    const Vec3 u = normal / len;
+    const Vec4 candidate = oriented(u, -u.dot(a));
+    const int count = mark_inliers(points, candidate, options.inlier_threshold, nullptr);
+    if (count > best_count) {
+      best_count = count;
+      best = candidate;
+    }
+  }
+  if (best_count < 3) throw std::invalid_argument("fit_plane_ransac: points are degenerate "
+                                                  "(all collinear)");
+  PlaneFit fit;
+  fit.inliers.assign(n, 0);
+  fit.plane = best;
+  // Two refits: the least-squares plane can gain inliers the sampled plane missed.
+  for (int round = 0; round < 2; ++round) {
+    const int count = mark_inliers(points, fit.plane, options.inlier_threshold, &fit.inliers);
+    if (count < 3) break;
+    fit.plane = fit_plane_svd(gather(points, fit.inliers, count));
+  }
+  fit.num_inliers = mark_inliers(points, fit.plane, options.inlier_threshold, &fit.inliers);
+  const Points3 in = gather(points, fit.inliers, fit.num_inliers);
+  const Eigen::VectorXd dist = (in * fit.plane.head<3>()).array() + fit.plane.w();
+  fit.rms = fit.num_inliers > 0 ? std::sqrt(dist.squaredNorm() / fit.num_inliers) : 0.0;
+  return fit;
+}
+
+}  // namespace twistslam::geometry

@@ -1,0 +1,72 @@
+"""Readers of the per-frame sensor files: images, LiDAR scans, timestamps."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from ._parsing import PathLike, iter_lines, parse_error, to_floats
+
+
+class MissingDataWarning(UserWarning):
+    """A modality or a file of a sequence is missing, or data had to be dropped."""
+
+
+def read_image(path: PathLike) -> np.ndarray:
+    """Read an image as ``(H, W, 3)`` uint8 RGB (grey images are replicated to 3 channels)."""
+    from PIL import Image  # Pillow only when images are actually read
+
+    with Image.open(path) as image:
+        return np.array(image.convert("RGB"), dtype=np.uint8)
+
+
+def read_velodyne(path: PathLike) -> np.ndarray:
+    """Read a KITTI LiDAR scan: float32 little-endian ``x y z intensity`` -> ``(N, 4)`` float32.
+
+    Rows containing NaN or inf are dropped with a :class:`MissingDataWarning` naming the file
+    (one corrupt point should not stop a run over a whole sequence).
+
+    Raises
+    ------
+    ValueError
+        If the file size is not a multiple of 16 bytes (4 float32 per point): the file is
+        truncated or not a KITTI scan, and reshaping it would silently misalign every point.
+    """
+    path = Path(path)
+    size = path.stat().st_size
+    if size % 16 != 0:
+        raise ValueError(
+            f"{path}: size {size} bytes is not a multiple of 16 (4 float32 per point); "
+            "truncated or not a KITTI velodyne scan"
+        )
+    points = np.fromfile(path, dtype="<f4").reshape(-1, 4)
+    finite = np.isfinite(points).all(axis=1)
+    if not finite.all():
+        warnings.warn(
+            f"{path}: dropped {int((~finite).sum())} of {len(points)} points with NaN/inf",
+            MissingDataWarning,
+            stacklevel=2,
+        )
+        points = points[finite]
+    return points.astype(np.float32, copy=False)
+
+
+def write_velodyne(path: PathLike, points: np.ndarray) -> None:
+    """Write ``(N, 4)`` points as a KITTI velodyne ``.bin`` (float32 little-endian)."""
+    points = np.asarray(points, dtype="<f4")
+    if points.ndim != 2 or points.shape[1] != 4:
+        raise ValueError(f"write_velodyne: expected (N, 4) points, got shape {points.shape}")
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    points.tofile(path)
+
+
+def read_timestamps(path: PathLike) -> np.ndarray:
+    """Read one time in seconds per line -> ``(N,)`` float64."""
+    times = []
+    for line_no, tokens in iter_lines(path):
+        if len(tokens) != 1:
+            raise parse_error(path, line_no, f"expected 1 value (seconds), got {len(tokens)}")
+        times.append(to_floats(tokens, path, line_no, "timestamp")[0])
+    return np.array(times, dtype=np.float64)
