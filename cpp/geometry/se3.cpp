@@ -1,5 +1,6 @@
 #include "geometry/se3.hpp"
 
+#include <Eigen/LU>
 #include <cmath>
 
 #include "geometry/so3.hpp"

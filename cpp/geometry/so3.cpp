@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
+#include <Eigen/LU>
 #include <cmath>
 
 namespace twistslam::geometry {

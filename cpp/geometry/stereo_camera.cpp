@@ -1,5 +1,6 @@
 #include "geometry/stereo_camera.hpp"
 
+#include <Eigen/LU>
 #include <cmath>
 #include <limits>
 #include <stdexcept>

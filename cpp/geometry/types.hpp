@@ -1,6 +1,6 @@
 #pragma once
 // Fixed-size Eigen aliases shared by every module. Twists are xi = [v; w] (DESIGN.md).
-#include <Eigen/Core>
+#include <Eigen/Dense>  // Core + LU + Geometry + SVD: every module needs them
 
 namespace twistslam {
 

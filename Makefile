@@ -1,0 +1,61 @@
+# twistslam developer entry points. `make test` and `make demo` set up everything they need.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+PIP := $(VENV)/bin/pip
+TORCH_VERSION := 2.13.0
+# pip's CMake 4 refuses Debian's old config files without this policy floor.
+export CMAKE_POLICY_VERSION_MINIMUM := 3.5
+export CMAKE_BUILD_PARALLEL_LEVEL ?= 2
+
+# Debian packages the C++ core builds against (libpcl-dev with its recommends: VTK, MPI).
+APT_PACKAGES := build-essential ccache libeigen3-dev libceres-dev libopencv-dev libpcl-dev libgtest-dev
+CPP_SOURCES := $(shell find cpp cmake -type f) CMakeLists.txt pyproject.toml
+CPP_TEST_BUILD := build/cpp-tests
+
+.PHONY: setup apt venv build test test-cpp test-python demo clean help
+help:
+	@echo "make setup   - apt packages, .venv, torch==$(TORCH_VERSION) (CPU), editable install"
+	@echo "make test    - set up if needed, then C++ (ctest) and Python (pytest) tests"
+	@echo "make demo    - run the main job on the bundled default data"
+
+setup: apt .stamp-venv .stamp-build
+
+apt:
+	@missing=$$(for p in $(APT_PACKAGES); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q "install ok installed" || echo $$p; done); \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages: $$missing"; \
+	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -q --install-recommends $$missing; \
+	fi
+
+# torch first, pinned, so that nothing later pulls a multi-GB CUDA build.
+.stamp-venv: pyproject.toml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PIP) install -q --upgrade pip
+	$(PIP) install -q "torch==$(TORCH_VERSION)"
+	$(PIP) install -q scikit-build-core "pybind11>=2.12" "cmake>=3.22" ninja numpy
+	$(PIP) install -q --no-build-isolation -e ".[dev,models]"
+	@touch $@ .stamp-build
+
+# Rebuild the extension when C++ changes (incremental: build/{wheel_tag} is kept).
+.stamp-build: $(CPP_SOURCES) | .stamp-venv
+	$(PIP) install -q --no-build-isolation --no-deps -e .
+	@touch $@
+
+build: apt .stamp-venv .stamp-build
+
+test: build test-cpp test-python
+
+test-cpp: apt .stamp-venv
+	$(VENV)/bin/cmake -S . -B $(CPP_TEST_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release \
+	  -DTWISTSLAM_BUILD_TESTS=ON -DTWISTSLAM_BUILD_PYTHON=OFF -DCMAKE_MAKE_PROGRAM=$(abspath $(VENV)/bin/ninja) > /dev/null
+	$(VENV)/bin/cmake --build $(CPP_TEST_BUILD)
+	cd $(CPP_TEST_BUILD) && $(abspath $(VENV)/bin/ctest) --output-on-failure
+
+test-python: build
+	$(PY) -m pytest tests/python -q
+
+clean:
+	rm -rf build .stamp-venv .stamp-build
