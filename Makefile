@@ -33,7 +33,6 @@ apt:
 # torch first, pinned, so that nothing later pulls a multi-GB CUDA build.
 .stamp-venv: pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PIP) install -q --upgrade pip
 	$(PIP) install -q "torch==$(TORCH_VERSION)"
 	$(PIP) install -q scikit-build-core "pybind11>=2.12" "cmake>=3.22" ninja numpy
 	$(PIP) install -q --no-build-isolation -e ".[dev,models]"

@@ -88,8 +88,14 @@ class Calibration:
 
     @property
     def baseline(self) -> float:
-        """Stereo baseline between cameras 2 and 3 in metres (about 0.53 m on KITTI)."""
-        return float((self.P2[0, 3] - self.P3[0, 3]) / self.P2[0, 0])
+        """Stereo baseline between cameras 2 and 3 in metres (about 0.53 m on KITTI).
+
+        The x distance between the two camera centres, ``t = K^-1 P[:, 3]`` for each camera;
+        the same definition as ``StereoCamera.baseline``. It differs from the devkit's
+        shortcut ``(P2[0,3] - P3[0,3]) / fx`` by ``cx * (tz2 - tz3) / fx`` (about 1e-5 m).
+        """
+        K_inv = np.linalg.inv(self.P2[:, :3])
+        return float((K_inv @ self.P2[:, 3])[0] - (K_inv @ self.P3[:, 3])[0])
 
     def stereo_camera(self, width: int, height: int):
         """The C++ ``twistslam.geometry.StereoCamera`` of cameras 2 and 3."""

@@ -33,7 +33,7 @@ from .calibration import read_calibration
 from .frame import Frame
 from .labels import read_labels
 from .objects import ObjectTable
-from .oxts import read_oxts, read_oxts_poses
+from .oxts import read_oxts_poses
 from .poses import read_poses
 from .sensors import MissingDataWarning, read_image, read_timestamps, read_velodyne
 
@@ -47,7 +47,8 @@ class KittiTracking:
     """Sequence ``seq`` of the KITTI tracking benchmark under ``root/<split>``.
 
     Frames are read from disk on each ``seq[i]``; only the calibration, the file listings and
-    (on first use) the small ground-truth text files are read up front.
+    (on first use) the small ground-truth text files are read up front. ``len`` is the
+    largest frame index found in any source (images, LiDAR, labels, poses/oxts) plus one.
     """
 
     def __init__(self, root: PathLike, seq: int | str, split: str = "training") -> None:
@@ -114,11 +115,6 @@ class KittiTracking:
         return read_labels(path)
 
     @cached_property
-    def _oxts_rows(self) -> int:
-        path = self._path("oxts")
-        return len(read_oxts(path)) if path.is_file() else 0
-
-    @cached_property
     def gt_poses(self) -> np.ndarray | None:
         """Ground-truth ``T_w_c`` (N, 4, 4): ``poses/`` if present, else from ``oxts/``."""
         if self._path("poses").is_file():
@@ -137,7 +133,6 @@ class KittiTracking:
             counts.append(int(self.gt_objects.frame.max()) + 1)
         if self.gt_poses is not None:
             counts.append(len(self.gt_poses))
-        counts.append(self._oxts_rows)
         return max(counts, default=0)
 
     def __len__(self) -> int:

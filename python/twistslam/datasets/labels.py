@@ -78,7 +78,8 @@ def format_label_lines(table: ObjectTable, with_score: bool = True) -> list[str]
         cx, _, cz, length, w, h, ry = b[i]
         fields = [
             str(table.frame[i]), str(table.track_id[i]), str(table.cls[i]),
-            _format_truncation(table.truncation[i]), str(table.occlusion[i]), f"{table.alpha[i]:.6f}",
+            _format_truncation(table.truncation[i]), str(table.occlusion[i]),
+            f"{table.alpha[i]:.6f}",
             *(f"{v:.6f}" for v in table.box_2d[i]),
             *(f"{v:.6f}" for v in (h, w, length, cx, y[i], cz, ry)),
         ]

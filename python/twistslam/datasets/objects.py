@@ -21,7 +21,7 @@ import numpy as np
 DONT_CARE = "DontCare"
 
 
-@dataclass
+@dataclass(eq=False)
 class ObjectTable:
     """Objects of one sequence, one row per (frame, object); all arrays have length N."""
 
@@ -96,6 +96,21 @@ class ObjectTable:
             if f.name != "source"
         }
         return ObjectTable(**columns, source=tables[0].source)
+
+    def equals(self, other: "ObjectTable", atol: float = 0.0) -> bool:
+        """True when both tables hold the same rows in the same order (floats within atol)."""
+        if len(self) != len(other):
+            return False
+        for f in fields(self):
+            if f.name == "source":
+                continue
+            a, b = getattr(self, f.name), getattr(other, f.name)
+            if a.dtype.kind == "f":
+                if not np.allclose(a, b, rtol=0.0, atol=atol, equal_nan=True):
+                    return False
+            elif not np.array_equal(a, b):
+                return False
+        return True
 
     def sorted(self) -> "ObjectTable":
         """Rows ordered by (frame, track_id), the order KITTI files use."""

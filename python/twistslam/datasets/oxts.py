@@ -66,9 +66,14 @@ def oxts_to_camera_poses(oxts: np.ndarray, calib: Calibration) -> np.ndarray:
     T_m_imu = oxts_to_imu_poses(oxts)
     if len(T_m_imu) == 0:
         return T_m_imu
+    # inv(T_m_imu(0)) @ T_m_imu(i), written out so that the Mercator coordinates (~5e6 m)
+    # are subtracted before rotating: inv() @ would lose ~1e-10 m to cancellation
+    R0, t0 = T_m_imu[0, :3, :3], T_m_imu[0, :3, 3]
+    T_imu0_imu = np.tile(np.eye(4), (len(T_m_imu), 1, 1))
+    T_imu0_imu[:, :3, :3] = R0.T @ T_m_imu[:, :3, :3]
+    T_imu0_imu[:, :3, 3] = (T_m_imu[:, :3, 3] - t0) @ R0
     T_c_imu = calib.T_c_imu
-    T_imu0_m = np.linalg.inv(T_m_imu[0])
-    return T_c_imu @ T_imu0_m @ T_m_imu @ np.linalg.inv(T_c_imu)
+    return T_c_imu @ T_imu0_imu @ np.linalg.inv(T_c_imu)
 
 
 def read_oxts_poses(path: PathLike, calib: Calibration) -> np.ndarray:
@@ -77,7 +82,11 @@ def read_oxts_poses(path: PathLike, calib: Calibration) -> np.ndarray:
 
 
 def camera_poses_to_oxts(
-    T_w_c: np.ndarray, calib: Calibration, lat0: float = 49.0, lon0: float = 8.4, alt0: float = 110.0
+    T_w_c: np.ndarray,
+    calib: Calibration,
+    lat0: float = 49.0,
+    lon0: float = 8.4,
+    alt0: float = 110.0,
 ) -> np.ndarray:
     """Exact inverse of :func:`oxts_to_camera_poses`: oxts rows (N, 30) for camera poses.
 

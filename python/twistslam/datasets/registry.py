@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+from ._parsing import PathLike
 from .frame import Sequence
 from .kitti_tracking import KittiTracking
-from ._parsing import PathLike
 
 #: dataset name -> class; a class is built as ``cls(root, seq, split=...)`` and, for a single
 #: path, as ``cls.from_path(path)``
