@@ -1,4 +1,22 @@
-"""Sequence-level CLEAR MOT (Bernardin & Stiefelhagen 2008) and MT / ML (Li et al. 2009)."""
+"""Sequence-level CLEAR MOT (Bernardin & Stiefelhagen 2008) and MT / ML (Li et al. 2009).
+
+Matching and ignore rules are the KITTI tracking devkit's (see :mod:`.matching`). Where the
+devkit's bookkeeping departs from the CLEAR MOT definitions we follow the definitions (and
+motmetrics, which the tests compare against):
+
+- ID switch: whenever a ground-truth track's matched tracker id differs from the id it was
+  *last* matched to, also across missed frames (the devkit only counts it when the previous
+  frame was matched, and forgets the last id after an ignored frame).
+- Fragmentation: each re-acquisition of a track after a miss (matched, lost, matched
+  again); the devkit also counts direct id changes and looks one frame ahead.
+- MOTP: mean IoU over *counted* true positives; the devkit's also averages the overlaps of
+  tracker boxes matched to ignored ground truth.
+- MT / ML: in percent of the tracks that are not entirely ignored, with the tracked ratio
+  over the track's non-ignored frames only.
+- MOTA / MOTP without any counted ground truth / true positive: NaN (devkit: -inf / inf).
+
+Frames where a ground-truth box is ignored are left out of its history altogether.
+"""
 
 from __future__ import annotations
 
@@ -82,9 +100,9 @@ def clear_mot(m: Matching) -> MotMetrics:
     for _, history in track_histories(m):
         s, f = count_switches(history)
         idsw, frag = idsw + s, frag + f
-        ratio = np.mean(history >= 0)
-        mt += ratio > 0.8
-        ml += ratio < 0.2
+        ratio = float(np.mean(history >= 0))
+        mt += int(ratio > 0.8)
+        ml += int(ratio < 0.2)
         n_tracks += 1
     n_fp, n_fn, n_tp = int(fp.sum()), int(fn.sum()), int(tp.sum())
     nan = float("nan")

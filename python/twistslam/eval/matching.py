@@ -2,11 +2,22 @@
 
 In every frame, ground-truth boxes (the evaluated class *and* its neighbour class, whatever
 their difficulty) are assigned to tracker boxes by the Hungarian method on ``1 - IoU``;
-pairs whose IoU is below the threshold are forbidden. The result is columnar
-(:class:`Matching`): for each ground-truth row its tracker row, IoU and whether it is
-ignored; for each tracker row its ground-truth row and whether it is ignored. CLEAR MOT and
-the per-track rates are then plain array arithmetic on it (:mod:`.clear_mot`,
-:mod:`.track_metrics`).
+pairs whose IoU is below the threshold are forbidden. Then, as in the devkit:
+
+- a ground-truth box of the neighbour class (Van for Car) or outside the difficulty level
+  is *ignored*: matched, its tracker box is neither a true nor a false positive; unmatched,
+  it is no miss. Unlike the devkit, the difficulty's minimum image height applies to ground
+  truth too (the KITTI object benchmark's definition of easy / moderate / hard; the
+  tracking devkit only filters tracker boxes by height);
+- an unmatched tracker box is no false positive when it is of the neighbour class, at most
+  the minimum height tall, or lies more than half inside a DontCare region (the share of
+  its own area, not an IoU) -- always judged on image boxes, whatever the overlap mode;
+- tracker rows of other classes, and rows without a track id (-1), are not evaluated.
+
+The result is columnar (:class:`Matching`): for each ground-truth row its tracker row, IoU
+and whether it is ignored; for each tracker row its ground-truth row and whether it is
+ignored. CLEAR MOT and the per-track rates are then plain array arithmetic on it
+(:mod:`.clear_mot`, :mod:`.track_metrics`).
 """
 
 from __future__ import annotations
@@ -149,7 +160,8 @@ def match_sequence(
     e = est.select((e_target | e_neighbour) & (est.track_id >= 0))
     e_neighbour = class_masks(e, cls)[1]
 
-    gt_ignored = class_masks(g, cls)[1] | ~difficulty.accepts(g)
+    g_target, g_neighbour, _ = class_masks(g, cls)
+    gt_ignored = g_neighbour | ~difficulty.accepts(g)
     gt_match = np.full(len(g), -1, dtype=np.int64)
     gt_iou = np.full(len(g), np.nan)
     est_match = np.full(len(e), -1, dtype=np.int64)
@@ -172,10 +184,11 @@ def match_sequence(
         ei = np.flatnonzero(e.frame == frame)
         ratio = overlap_ratio_2d(e.box_2d[ei], dc.box_2d[dc.frame == frame])
         in_dont_care[ei] = (ratio > 0.5).any(axis=1)
-    est_ignored = (est_match < 0) & (e_neighbour | (height <= difficulty.min_height) | in_dont_care)
+    too_small = height <= difficulty.min_height
+    est_ignored = (est_match < 0) & (e_neighbour | too_small | in_dont_care)
 
     return Matching(
-        mode=mode, threshold=threshold, gt=g, gt_target=class_masks(g, cls)[0],
+        mode=mode, threshold=threshold, gt=g, gt_target=g_target,
         gt_ignored=gt_ignored, gt_match=gt_match, gt_iou=gt_iou,
         est=e, est_match=est_match, est_ignored=est_ignored,
     )

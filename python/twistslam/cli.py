@@ -1,0 +1,102 @@
+"""Command line: ``twistslam <command> ...``.
+
+Each command is a ``_add_<name>(subparsers)`` that registers its arguments and a handler
+``args -> exit code``; :func:`main` dispatches. Errors a user can fix (missing or malformed
+files, bad options) are printed as one ``twistslam <command>: error: ...`` line with exit
+code 2, not as a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import warnings
+from pathlib import Path
+
+
+def _iou(text: str) -> float:
+    value = float(text)
+    if not 0.0 < value <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be in (0, 1], got {text}")
+    return value
+
+
+def _run_eval(args: argparse.Namespace) -> int:
+    # imported here, not at the top: keeps `twistslam --help` fast (no scipy, matplotlib)
+    from .eval.report import load_paper_tables, render_markdown, render_text
+    from .eval.sequence import evaluate_sequence
+
+    metrics = evaluate_sequence(
+        args.root, args.results, args.seq,
+        iou_threshold=args.iou, difficulty=args.difficulty, cls=args.cls,
+        object_alignment="se3" if args.align_objects else "none", split=args.split,
+    )
+    paper = load_paper_tables(args.paper) if args.paper else None
+    print(render_text(metrics, paper), end="")
+    if args.json:
+        path = Path(args.json)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(metrics.to_dict(), indent=2) + "\n", encoding="utf-8")
+        print(f"wrote {path}")
+    if args.markdown:
+        path = Path(args.markdown)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(render_markdown(metrics, paper), encoding="utf-8")
+        print(f"wrote {path}")
+    if args.plots:
+        from .eval.plots import plot_trajectories
+
+        for p in plot_trajectories(metrics, args.plots):
+            print(f"wrote {p}")
+    return 0
+
+
+def _add_eval(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "eval",
+        help="evaluate results against KITTI tracking ground truth",
+        description="Camera RPE / ATE, per-object ATE / RPE, TP and MOTP (2D, bird view, 3D) "
+        "and CLEAR MOT of one sequence, printed as the paper's tables.",
+    )
+    p.add_argument("root", help="KITTI tracking root (holding training/calib, label_02, ...)")
+    p.add_argument("results", help="results directory: camera_poses.txt and/or tracking/XXXX.txt")
+    p.add_argument("--seq", required=True, help="sequence number, e.g. 0001")
+    p.add_argument("--split", default="training", help="dataset split folder (default: training)")
+    p.add_argument("--json", metavar="FILE", help="write the metrics as JSON")
+    p.add_argument("--markdown", metavar="FILE", help="write the tables as Markdown")
+    p.add_argument("--plots", metavar="DIR", help="write bird-view trajectory PNGs")
+    p.add_argument("--iou", type=_iou, default=0.25, help="IoU threshold of a true positive")
+    p.add_argument("--difficulty", default="easy", choices=["easy", "moderate", "hard"])
+    p.add_argument("--cls", default="car", help="evaluated class (car, pedestrian, ...)")
+    p.add_argument("--align-objects", action="store_true",
+                   help="report object ATE after SE(3) alignment (systems without canonical pose)")
+    p.add_argument("--paper", metavar="TABLES_JSON",
+                   help="the paper's tables.json: print its rows beside ours")
+    p.set_defaults(handler=_run_eval)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="twistslam", description="TwistSLAM++ dynamic SLAM")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="command")
+    _add_eval(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``twistslam`` script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    # warnings are for the user here, not for a developer: one line, no source location
+    warnings.formatwarning = lambda message, category, *_: (
+        f"twistslam {args.command}: warning: {message}\n"
+    )
+    try:
+        return args.handler(args)
+    except (FileNotFoundError, ValueError) as exc:
+        print(f"twistslam {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
