@@ -15,7 +15,7 @@ APT_PACKAGES := build-essential ccache libeigen3-dev libceres-dev libopencv-dev 
 CPP_SOURCES := $(shell find cpp cmake -type f) $(shell find python -name "*.py") CMakeLists.txt pyproject.toml
 CPP_TEST_BUILD := build/cpp-tests
 
-.PHONY: setup apt venv build test test-cpp test-python demo clean help
+.PHONY: setup apt build test test-cpp test-python demo clean help
 help:
 	@echo "make setup   - apt packages, .venv, torch==$(TORCH_VERSION) (CPU), editable install"
 	@echo "make test    - set up if needed, then C++ (ctest) and Python (pytest) tests"
@@ -59,3 +59,8 @@ test-python: build
 
 clean:
 	rm -rf build .stamp-venv .stamp-build
+
+# Bundled default data: the project's shared KITTI tracking files beside the checkout.
+DATA ?= ../shared/data/kitti_tracking
+demo: build
+	$(PY) -m twistslam.demo --data $(DATA) --out demo_out

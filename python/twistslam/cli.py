@@ -88,6 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     # warnings are for the user here, not for a developer: one line, no source location
+    previous_format = warnings.formatwarning
     warnings.formatwarning = lambda message, category, *_: (
         f"twistslam {args.command}: warning: {message}\n"
     )
@@ -96,6 +97,8 @@ def main(argv: list[str] | None = None) -> int:
     except (FileNotFoundError, ValueError) as exc:
         print(f"twistslam {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    finally:
+        warnings.formatwarning = previous_format
 
 
 if __name__ == "__main__":
