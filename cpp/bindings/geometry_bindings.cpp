@@ -119,6 +119,22 @@ Returns
 )doc");
 }
 
+// (N, 3) points from left pixels (N, 2) and one value per pixel (depth or disparity).
+template <typename F>
+DoubleArray per_pixel(py::handle uv, py::handle values, const char* name, F&& to_point) {
+  const DoubleArray px = as_rows(uv, "uv", 2);
+  const DoubleArray v = as_double_array(values, name);
+  if (v.ndim() != 1 || v.shape(0) != px.shape(0))
+    throw py::value_error(std::string(name) + ": expected shape (" + std::to_string(px.shape(0)) +
+                          ",), got " + shape_string(v));
+  DoubleArray out = new_array({px.shape(0), 3});
+  for (py::ssize_t i = 0; i < px.shape(0); ++i) {
+    const Vec3 X = to_point(Vec2(px.data()[2 * i], px.data()[2 * i + 1]), v.data()[i]);
+    for (int k = 0; k < 3; ++k) out.mutable_data()[3 * i + k] = X[k];
+  }
+  return out;
+}
+
 void bind_camera(py::module_& m) {
   py::class_<g::StereoCamera>(m, "StereoCamera", "Rectified pinhole stereo pair (KITTI P2/P3).")
       .def_static(
@@ -164,32 +180,16 @@ void bind_camera(py::module_& m) {
            "the camera.")
       .def("backproject",
            [](const g::StereoCamera& c, py::handle uv, py::handle depth) {
-             const DoubleArray px = as_rows(uv, "uv", 2);
-             const DoubleArray d = as_double_array(depth, "depth");
-             if (d.ndim() != 1 || d.shape(0) != px.shape(0))
-               throw py::value_error("depth: expected shape (" + std::to_string(px.shape(0)) +
-                                     ",), got " + shape_string(d));
-             DoubleArray out = new_array({px.shape(0), 3});
-             for (py::ssize_t i = 0; i < px.shape(0); ++i) {
-               const Vec3 X = c.backproject(Vec2(px.data()[2 * i], px.data()[2 * i + 1]), d.data()[i]);
-               for (int k = 0; k < 3; ++k) out.mutable_data()[3 * i + k] = X[k];
-             }
-             return out;
+             return per_pixel(uv, depth, "depth", [&](const Vec2& px, double z) {
+               return c.backproject(px, z);
+             });
            },
            "uv"_a, "depth"_a, "Points (N, 3) in frame c at left pixels (N, 2) and depths (N,).")
       .def("triangulate",
            [](const g::StereoCamera& c, py::handle uv, py::handle disparity) {
-             const DoubleArray px = as_rows(uv, "uv", 2);
-             const DoubleArray d = as_double_array(disparity, "disparity");
-             if (d.ndim() != 1 || d.shape(0) != px.shape(0))
-               throw py::value_error("disparity: expected shape (" + std::to_string(px.shape(0)) +
-                                     ",), got " + shape_string(d));
-             DoubleArray out = new_array({px.shape(0), 3});
-             for (py::ssize_t i = 0; i < px.shape(0); ++i) {
-               const Vec3 X = c.triangulate(Vec2(px.data()[2 * i], px.data()[2 * i + 1]), d.data()[i]);
-               for (int k = 0; k < 3; ++k) out.mutable_data()[3 * i + k] = X[k];
-             }
-             return out;
+             return per_pixel(uv, disparity, "disparity", [&](const Vec2& px, double d) {
+               return c.triangulate(px, d);
+             });
            },
            "uv_left"_a, "disparity"_a,
            "Points (N, 3) in frame c from left pixels and disparities u_l - u_r (NaN where <= 0).")
