@@ -142,6 +142,24 @@ def test_ground_truth_poses_and_objects(kitti_root):
     np.testing.assert_array_equal(KittiTracking(kitti_root, SEQ).gt_poses, other)
 
 
+def test_ground_truth_tracks_are_world_poses(kitti_root):
+    seq = KittiTracking(kitti_root, SEQ)
+    tracks = seq.gt_tracks
+    assert sorted(tracks) == [0, 4]
+    car, person = tracks[0], tracks[4]
+    assert car.cls == "Car" and person.cls == "Pedestrian"
+    np.testing.assert_array_equal(person.frames, [f for f in range(N_FRAMES) if f != 1])
+    # T_w_o = T_w_c @ T_c_o: the box centre seen from the camera, moved into the world
+    for k, f in enumerate(car.frames):
+        centre_c = np.array([f * 0.5, 0.8, 10.0, 1.0])
+        np.testing.assert_allclose(car.T_w_o[k] @ [0, 0, 0, 1], make_poses()[f] @ centre_c, atol=1e-6)
+        # the object's x axis (its length) is camera x rotated by ry about camera y
+        axis_c = np.array([np.cos(0.1), 0.0, -np.sin(0.1)])
+        np.testing.assert_allclose(car.T_w_o[k][:3, 0], make_poses()[f][:3, :3] @ axis_c, atol=1e-6)
+    np.testing.assert_allclose(car.size, np.tile([4.0, 1.6, 1.5], (N_FRAMES, 1)), atol=1e-6)
+    assert car.velocity.shape == (N_FRAMES - 1, 3)
+
+
 def test_timestamps_file(kitti_root):
     times = 1.5 + 0.1037 * np.arange(N_FRAMES)
     (kitti_root / "training" / "timestamps").mkdir()

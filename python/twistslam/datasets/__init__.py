@@ -19,6 +19,7 @@ from .oxts import (
     write_oxts,
 )
 from .poses import read_poses, write_poses
+from .tracks import ObjectTrack, box_poses, object_tracks, world_poses
 from .registry import DATASETS, open_sequence, register_dataset
 from .sensors import MissingDataWarning, read_image, read_timestamps, read_velodyne, write_velodyne
 
@@ -31,8 +32,11 @@ __all__ = [
     "KittiTracking",
     "MissingDataWarning",
     "ObjectTable",
+    "ObjectTrack",
     "Sequence",
+    "box_poses",
     "camera_poses_to_oxts",
+    "object_tracks",
     "open_sequence",
     "oxts_to_camera_poses",
     "oxts_to_imu_poses",
@@ -52,5 +56,6 @@ __all__ = [
     "write_oxts",
     "write_poses",
     "write_tracking_results",
+    "world_poses",
     "write_velodyne",
 ]

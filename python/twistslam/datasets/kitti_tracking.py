@@ -35,6 +35,7 @@ from .labels import read_labels
 from .objects import ObjectTable
 from .oxts import read_oxts_poses
 from .poses import read_poses
+from .tracks import ObjectTrack, object_tracks
 from .sensors import MissingDataWarning, read_image, read_timestamps, read_velodyne
 
 log = logging.getLogger(__name__)
@@ -123,6 +124,15 @@ class KittiTracking:
             return read_oxts_poses(self._path("oxts"), self.calib)
         log.info("%s: no ground-truth poses (neither poses/ nor oxts/)", self)
         return None
+
+    @cached_property
+    def gt_tracks(self) -> dict[int, ObjectTrack] | None:
+        """Ground-truth object tracks keyed by track id: world-frame poses ``T_w_o``, sizes,
+        class, truncation and occlusion per frame (in each frame's camera frame when the
+        sequence has no ground-truth camera poses)."""
+        if self.gt_objects is None:
+            return None
+        return object_tracks(self.gt_objects, self.gt_poses)
 
     @cached_property
     def _length(self) -> int:

@@ -1,8 +1,6 @@
 """Object trajectories from boxes, and per-track ATE / RPE.
 
-An object pose is ``T_w_o = T_w_c(frame) @ T_c_o`` where ``T_c_o`` comes from the box:
-origin at the box's geometric centre, rotated about the camera y axis by ``ry`` (so the
-object x axis, its length, is camera x when ``ry = 0``; see ``datasets/objects.py``).
+Object poses come from :mod:`twistslam.datasets.tracks` (``T_w_o = T_w_c @ T_c_o``).
 """
 
 from __future__ import annotations
@@ -11,46 +9,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .trajectory import ate_errors, invert, relative_errors, rmse, valid_pose_mask
+from ..datasets.tracks import box_poses, world_poses  # noqa: F401  (re-exported)
+from .trajectory import ate_errors, invert, relative_errors, rmse
 
 #: below this total ground-truth path length (m) RPE per metre is undefined (a parked car
 #: seen with exact ground truth); reported as NaN rather than a huge number
 MIN_TRACK_LENGTH = 1e-9
-
-
-def box_poses(box_3d: np.ndarray) -> np.ndarray:
-    """(N, 4, 4) ``T_c_o`` of boxes ``[cx, cy, cz, l, w, h, ry]``."""
-    box_3d = np.asarray(box_3d, dtype=np.float64).reshape(-1, 7)
-    c, s = np.cos(box_3d[:, 6]), np.sin(box_3d[:, 6])
-    T = np.tile(np.eye(4), (len(box_3d), 1, 1))
-    T[:, 0, 0], T[:, 0, 2] = c, s
-    T[:, 2, 0], T[:, 2, 2] = -s, c
-    T[:, :3, 3] = box_3d[:, :3]
-    return T
-
-
-def world_poses(
-    frames: np.ndarray, box_3d: np.ndarray, camera_poses: np.ndarray | None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Object poses ``T_w_o`` and a validity mask.
-
-    Parameters
-    ----------
-    frames : (N,) frame index of each box.
-    box_3d : (N, 7) boxes in the camera frame of their frame.
-    camera_poses : (F, 4, 4) ``T_w_c`` indexed by frame, or None to stay in each frame's
-        camera frame (``T_w_c = I``). Boxes whose frame has no finite camera pose are
-        flagged invalid.
-    """
-    T_c_o = box_poses(box_3d)
-    if camera_poses is None:
-        return T_c_o, np.ones(len(T_c_o), dtype=bool)
-    frames = np.asarray(frames, dtype=np.int64)
-    valid = (frames >= 0) & (frames < len(camera_poses))
-    T_w_c = np.tile(np.eye(4), (len(frames), 1, 1))
-    T_w_c[valid] = camera_poses[frames[valid]]
-    valid &= valid_pose_mask(T_w_c)
-    return T_w_c @ T_c_o, valid
 
 
 @dataclass
