@@ -7,6 +7,8 @@
 
 namespace twistslam::bindings {
 void bind_geometry(py::module_& m);
+void bind_features(py::module_& m);
+void bind_optim(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -16,4 +18,8 @@ PYBIND11_MODULE(_core, m) {
         "Versions of the libraries (Eigen, Ceres, OpenCV, PCL) the core was built against.");
   py::module_ geometry = m.def_submodule("geometry", "SE(3), links, stereo camera, planes, boxes");
   twistslam::bindings::bind_geometry(geometry);
+  py::module_ features = m.def_submodule("features", "ORB extraction and stereo matching");
+  twistslam::bindings::bind_features(features);
+  py::module_ optim = m.def_submodule("optim", "pose-only optimisation and bundle adjustment");
+  twistslam::bindings::bind_optim(optim);
 }
