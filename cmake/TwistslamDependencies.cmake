@@ -1,6 +1,14 @@
 # Finds the Debian-packaged C++ dependencies. Each failure names the apt package to install
 # (`make setup` installs all of them).
 
+# Debian's PCL config predates these policies; pin them so its find modules behave as
+# written (FindBoost still in use) and the configure log stays readable.
+foreach(policy CMP0144 CMP0167)
+  if(POLICY ${policy})
+    cmake_policy(SET ${policy} OLD)
+  endif()
+endforeach()
+
 macro(twistslam_require package apt_package)
   find_package(${package} ${ARGN} QUIET)
   if(NOT ${package}_FOUND)
