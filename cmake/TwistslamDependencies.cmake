@@ -1,13 +1,10 @@
 # Finds the Debian-packaged C++ dependencies. Each failure names the apt package to install
 # (`make setup` installs all of them).
 
-# Debian's PCL config predates these policies; pin them so its find modules behave as
-# written (FindBoost still in use) and the configure log stays readable.
-foreach(policy CMP0144 CMP0167)
-  if(POLICY ${policy})
-    cmake_policy(SET ${policy} OLD)
-  endif()
-endforeach()
+# Debian's PCL config predates these policies and resets policies in its own scope, so the
+# defaults are what reaches it: keep its FindBoost use and accept <PKG>_ROOT variables.
+set(CMAKE_POLICY_DEFAULT_CMP0144 NEW)
+set(CMAKE_POLICY_DEFAULT_CMP0167 OLD)
 
 macro(twistslam_require package apt_package)
   find_package(${package} ${ARGN} QUIET)
