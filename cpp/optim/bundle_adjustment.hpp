@@ -1,0 +1,93 @@
+#pragma once
+// Local bundle adjustment over a window of keyframes (paper eq. 9, static term e_stat for
+// now): plain data in, refined in place. The map module fills a BAProblem from its keyframes
+// (the local window free, covisible keyframes fixed) and reads poses, points and per
+// observation outlier flags back. Public header: Eigen and std only; Ceres stays in the .cpp
+// files. The object terms (e_dyna, e_const, e_reg, e_det, e_geo) plug into the same Ceres
+// problem through the internal ProblemBuilder (problem_builder.hpp). See docs/optim.md.
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "geometry/stereo_camera.hpp"
+#include "geometry/types.hpp"
+
+namespace twistslam::optim {
+
+struct BAKeyframe {
+  Mat4 T_c_w = Mat4::Identity();
+  bool fixed = false;  // held constant (covisible keyframes outside the window, gauge)
+};
+
+struct BAPoint {
+  Vec3 X_w = Vec3::Zero();
+  bool fixed = false;
+};
+
+struct BAObservation {
+  int keyframe = -1;      // index into BAProblem::keyframes
+  int point = -1;         // index into BAProblem::points
+  Vec2 uv = Vec2::Zero(); // left image pixel
+  double u_right = -1;    // right image column; < 0: mono
+  double inv_sigma2 = 1;  // 1 / sigma^2 of the keypoint's octave
+};
+
+struct BAProblem {
+  std::vector<BAKeyframe> keyframes;
+  std::vector<BAPoint> points;
+  std::vector<BAObservation> observations;
+};
+
+enum class BALinearSolver {
+  kAuto,           // dense Schur for up to 100 free poses, sparse Schur above
+  kDenseSchur,
+  kSparseSchur,
+  kIterativeSchur,
+};
+
+struct BundleAdjustmentOptions {
+  int max_iterations_first = 5;    // first pass, every valid observation, Huber loss
+  int max_iterations_second = 10;  // second pass after the outliers are removed
+  double huber_delta_stereo = std::sqrt(7.815);
+  double huber_delta_mono = std::sqrt(5.991);
+  // Whitened chi2 thresholds of the outlier test (after the first pass and at the end).
+  double chi2_stereo = 7.815;
+  double chi2_mono = 5.991;
+  bool remove_outliers = true;  // false: one pass of first + second iterations, no removal
+  int num_threads = 2;
+  double min_depth = 0.1;  // m; closer points count as behind the camera
+  BALinearSolver linear_solver = BALinearSolver::kAuto;
+  double function_tolerance = 1e-6;  // Ceres' relative cost change for convergence
+  // Levenberg-Marquardt's first damping is 1 / radius (on the Jacobi-scaled normal
+  // equations). Ceres' default 1e4 lets the first steps fling weakly constrained points
+  // (far, mono) behind the cameras, and each rejected step costs an iteration.
+  double initial_trust_region_radius = 10;
+};
+
+struct BundleAdjustmentReport {
+  // 0.5 * sum of Huber(chi2) over every valid observation (outliers included), at the
+  // initial and the final state: the two are comparable.
+  double initial_cost = 0, final_cost = 0;
+  // RMS pixel error per image coordinate (u, v and u_right count separately) over the
+  // observations that are inliers at the end, at the initial and the final state.
+  double initial_rmse_px = 0, final_rmse_px = 0;
+  int num_outliers = 0;
+  // Per observation: 1 = outlier at the final state (chi2 above threshold, behind a camera,
+  // or invalid: non-finite data, inv_sigma2 <= 0, non-finite pose or point).
+  std::vector<std::uint8_t> outlier;
+  int iterations = 0;      // Ceres iterations over both passes
+  double solve_ms = 0;     // wall time of the whole call
+  bool converged = false;  // a usable solution was computed (false: nothing was changed)
+  int num_residuals = 0;   // observations in the first pass
+  std::string message;     // Ceres' termination message or the reason for not solving
+};
+
+// Refines the free keyframe poses and points of `problem` in place.
+// Throws std::invalid_argument if an observation indexes a keyframe or point out of range;
+// any other bad data (NaN, points behind the camera, no observations) gives outlier flags
+// and, when nothing can be solved, converged = false with the problem unchanged.
+BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoCamera& cam,
+                                     const BundleAdjustmentOptions& options = {});
+
+}  // namespace twistslam::optim

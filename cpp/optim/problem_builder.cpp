@@ -1,0 +1,184 @@
+#include "optim/problem_builder.hpp"
+
+#include <ceres/ordered_groups.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "optim/pose_parameterization.hpp"
+#include "optim/reprojection_costs.hpp"
+
+namespace twistslam::optim::detail {
+
+namespace {
+ceres::Problem::Options problem_options() {
+  ceres::Problem::Options o;
+  o.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // shared, owned by the builder
+  o.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;       // idem
+  o.enable_fast_removal = true;                              // outlier removal between passes
+  return o;
+}
+}  // namespace
+
+ProblemBuilder::ProblemBuilder()
+    : problem_(std::make_unique<ceres::Problem>(problem_options())),
+      pose_manifold_(std::make_unique<PoseManifold>()) {}
+
+ProblemBuilder::~ProblemBuilder() {
+  problem_.reset();  // before the losses, the manifold and the parameter storage it points to
+}
+
+int ProblemBuilder::register_block(double* data, int size, bool is_pose, bool fixed,
+                                   bool eliminate) {
+  if (is_pose) {
+    problem_->AddParameterBlock(data, size, pose_manifold_.get());
+  } else {
+    problem_->AddParameterBlock(data, size);
+  }
+  if (fixed) problem_->SetParameterBlockConstant(data);
+  blocks_.push_back({data, size, is_pose, fixed, eliminate});
+  return static_cast<int>(blocks_.size()) - 1;
+}
+
+int ProblemBuilder::add_pose(const Mat4& T, bool fixed) {
+  pose_storage_.emplace_back();
+  pose_to_params(T, pose_storage_.back().data());
+  return register_block(pose_storage_.back().data(), kPoseSize, true, fixed, false);
+}
+
+int ProblemBuilder::add_point(const Vec3& X, bool fixed) {
+  point_storage_.push_back({X.x(), X.y(), X.z()});
+  return register_block(point_storage_.back().data(), 3, false, fixed, true);
+}
+
+int ProblemBuilder::add_vector(const double* values, int size, bool fixed, bool eliminate) {
+  if (size <= 0) throw std::invalid_argument("ProblemBuilder::add_vector: size must be > 0");
+  vector_storage_.emplace_back(new double[size]);
+  std::copy(values, values + size, vector_storage_.back().get());
+  return register_block(vector_storage_.back().get(), size, false, fixed, eliminate);
+}
+
+Mat4 ProblemBuilder::pose(int block) const { return params_to_pose(blocks_[block].data); }
+
+Vec3 ProblemBuilder::point(int block) const {
+  return Eigen::Map<const Vec3>(blocks_[block].data);
+}
+
+ceres::LossFunction* ProblemBuilder::huber(double delta) {
+  if (!(delta > 0)) return nullptr;
+  auto& loss = losses_[delta];
+  if (!loss) loss = std::make_unique<ceres::HuberLoss>(delta);
+  return loss.get();
+}
+
+ceres::ResidualBlockId ProblemBuilder::add_stereo_reprojection(
+    int pose, int point, const geometry::StereoCamera& cam, const Vec2& uv, double u_right,
+    double inv_sigma2, double huber_delta, double min_depth) {
+  ceres::CostFunction* cost;
+  if (u_right >= 0) {
+    cost = new StereoReprojectionCost(&cam, Vec3(uv.x(), uv.y(), u_right), inv_sigma2,
+                                      min_depth);
+  } else {
+    cost = new MonoReprojectionCost(&cam, uv, inv_sigma2, min_depth);
+  }
+  return problem_->AddResidualBlock(cost, huber(huber_delta), blocks_[pose].data,
+                                    blocks_[point].data);
+}
+
+ceres::ResidualBlockId ProblemBuilder::add_residual(ceres::CostFunction* cost,
+                                                    ceres::LossFunction* loss,
+                                                    const std::vector<int>& blocks) {
+  std::vector<double*> ptrs;
+  ptrs.reserve(blocks.size());
+  for (int b : blocks) ptrs.push_back(blocks_[b].data);
+  return problem_->AddResidualBlock(cost, loss, ptrs);
+}
+
+void ProblemBuilder::gate(ceres::ResidualBlockId id, double chi2_threshold) {
+  gated_.emplace_back(id, chi2_threshold);
+}
+
+int ProblemBuilder::remove_gated_outliers() {
+  int removed = 0;
+  std::vector<double> r;
+  std::vector<std::pair<ceres::ResidualBlockId, double>> kept;
+  kept.reserve(gated_.size());
+  for (const auto& [id, threshold] : gated_) {
+    r.resize(problem_->GetCostFunctionForResidualBlock(id)->num_residuals());
+    double cost = 0;
+    const bool ok = problem_->EvaluateResidualBlock(id, false, &cost, r.data(), nullptr);
+    if (!ok || !std::isfinite(cost) || 2.0 * cost > threshold) {
+      problem_->RemoveResidualBlock(id);
+      ++removed;
+    } else {
+      kept.emplace_back(id, threshold);
+    }
+  }
+  gated_.swap(kept);
+  return removed;
+}
+
+int ProblemBuilder::num_residuals() const { return problem_->NumResidualBlocks(); }
+
+int ProblemBuilder::num_free_poses() const {
+  return static_cast<int>(std::count_if(blocks_.begin(), blocks_.end(),
+                                        [](const Block& b) { return b.is_pose && !b.fixed; }));
+}
+
+SolveSummary ProblemBuilder::solve(const SolveOptions& opt) {
+  SolveSummary out;
+  if (problem_->NumResidualBlocks() == 0) {
+    out.message = "no residuals";
+    return out;
+  }
+  ceres::Solver::Options o;
+  o.minimizer_type = ceres::TRUST_REGION;
+  o.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  o.max_num_iterations = std::max(opt.max_iterations, 0);
+  o.num_threads = std::max(opt.num_threads, 1);
+  o.function_tolerance = opt.function_tolerance;
+  o.gradient_tolerance = opt.gradient_tolerance;
+  o.parameter_tolerance = opt.parameter_tolerance;
+  o.minimizer_progress_to_stdout = false;
+  o.initial_trust_region_radius = opt.initial_trust_region_radius;
+  o.logging_type = ceres::SILENT;
+  switch (opt.linear_solver) {
+    case BALinearSolver::kDenseSchur: o.linear_solver_type = ceres::DENSE_SCHUR; break;
+    case BALinearSolver::kSparseSchur: o.linear_solver_type = ceres::SPARSE_SCHUR; break;
+    case BALinearSolver::kIterativeSchur:
+      o.linear_solver_type = ceres::ITERATIVE_SCHUR;
+      o.preconditioner_type = ceres::SCHUR_JACOBI;
+      break;
+    case BALinearSolver::kAuto:
+      // The reduced camera system of a local window (~10-30 poses, 6 tangent dof each) is
+      // small and dense: dense Cholesky beats sparse bookkeeping up to about a hundred poses.
+      o.linear_solver_type = num_free_poses() <= 100 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+      break;
+  }
+  if (o.linear_solver_type == ceres::SPARSE_SCHUR &&
+      !ceres::IsSparseLinearAlgebraLibraryTypeAvailable(o.sparse_linear_algebra_library_type)) {
+    o.linear_solver_type = ceres::ITERATIVE_SCHUR;
+    o.preconditioner_type = ceres::SCHUR_JACOBI;
+  }
+  // Schur ordering: points (and other eliminated blocks) first, poses and the rest after.
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (const Block& b : blocks_) ordering->AddElementToGroup(b.data, b.eliminate ? 0 : 1);
+  o.linear_solver_ordering = ordering;
+
+  std::string error;
+  if (!o.IsValid(&error)) {
+    out.message = "invalid solver options: " + error;
+    return out;
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(o, problem_.get(), &summary);
+  out.usable = summary.IsSolutionUsable();
+  out.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  out.initial_cost = summary.initial_cost;
+  out.final_cost = summary.final_cost;
+  out.message = summary.message;
+  return out;
+}
+
+}  // namespace twistslam::optim::detail

@@ -1,0 +1,122 @@
+#pragma once
+// Private (Ceres): one Ceres problem that every residual family of the BA (paper eq. 9) adds
+// itself to. Included by this module's .cpp files only.
+//
+//   ProblemBuilder b;
+//   int kf = b.add_pose(T_c_w, /*fixed=*/false);          // 7-vector, R^3 x SO(3)
+//   int pt = b.add_point(X_w, false);                     // 3-vector, eliminated by Schur
+//   auto id = b.add_stereo_reprojection(kf, pt, cam, uv, u_right, inv_sigma2, delta, 0.1);
+//   b.gate(id, 7.815);                                    // chi2 outlier test between passes
+//   b.solve(first); b.remove_gated_outliers(); b.solve(second);
+//
+// A later family (e_dyna, e_const, e_det, e_reg, e_geo) adds its blocks with add_pose /
+// add_point / add_vector (object poses T_w_o, twists, object-frame points) and its residuals
+// with add_residual(cost, loss, {blocks...}) -- or a dedicated add_xxx() next to
+// add_stereo_reprojection -- and the same two-pass solve, outlier gating and Schur ordering
+// apply: blocks marked `eliminate` (points) form the first elimination group.
+#include <ceres/loss_function.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
+
+#include <array>
+#include <deque>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "geometry/stereo_camera.hpp"
+#include "geometry/types.hpp"
+#include "optim/bundle_adjustment.hpp"
+
+namespace twistslam::optim::detail {
+
+struct SolveOptions {
+  int max_iterations = 10;
+  int num_threads = 2;
+  BALinearSolver linear_solver = BALinearSolver::kAuto;
+  double function_tolerance = 1e-6;
+  double initial_trust_region_radius = 10;
+  double gradient_tolerance = 1e-10;
+  double parameter_tolerance = 1e-8;
+};
+
+struct SolveSummary {
+  bool usable = false;  // Ceres produced a solution (converged or ran out of iterations)
+  int iterations = 0;
+  double initial_cost = 0, final_cost = 0;
+  std::string message;
+};
+
+class ProblemBuilder {
+ public:
+  ProblemBuilder();
+  ~ProblemBuilder();
+  ProblemBuilder(const ProblemBuilder&) = delete;
+  ProblemBuilder& operator=(const ProblemBuilder&) = delete;
+
+  // Parameter blocks; the builder owns their storage (stable addresses). Each returns a
+  // block handle for the add_* functions below.
+  int add_pose(const Mat4& T, bool fixed);
+  int add_point(const Vec3& X, bool fixed);
+  // A generic Euclidean block (twist, size, ...); `eliminate` puts it in the Schur
+  // elimination group (only for blocks that, like points, never share a residual with
+  // another eliminated block).
+  int add_vector(const double* values, int size, bool fixed, bool eliminate = false);
+
+  int num_blocks() const { return static_cast<int>(blocks_.size()); }
+  double* data(int block) { return blocks_[block].data; }
+  int size(int block) const { return blocks_[block].size; }
+  Mat4 pose(int block) const;
+  Vec3 point(int block) const;
+
+  // Huber loss on the squared whitened error, shared and owned by the builder; nullptr for
+  // delta <= 0 (plain least squares).
+  ceres::LossFunction* huber(double delta);
+
+  // e_stat: stereo (u_right >= 0) or mono reprojection of point block `point` in pose block
+  // `pose` (T_c_w). `cam` must outlive the builder.
+  ceres::ResidualBlockId add_stereo_reprojection(int pose, int point,
+                                                 const geometry::StereoCamera& cam,
+                                                 const Vec2& uv, double u_right,
+                                                 double inv_sigma2, double huber_delta,
+                                                 double min_depth);
+
+  // Any other residual family: takes ownership of `cost`; `loss` from huber() (or owned
+  // elsewhere, never taken over).
+  ceres::ResidualBlockId add_residual(ceres::CostFunction* cost, ceres::LossFunction* loss,
+                                      const std::vector<int>& blocks);
+
+  // Outlier gating: after a pass, remove_gated_outliers() evaluates each gated residual
+  // without its loss, and removes it if chi2 = |r|^2 > threshold or it cannot be evaluated
+  // (a point behind the camera). Returns the number removed.
+  void gate(ceres::ResidualBlockId id, double chi2_threshold);
+  int remove_gated_outliers();
+
+  int num_residuals() const;
+  int num_free_poses() const;
+  SolveSummary solve(const SolveOptions& options);
+
+  ceres::Problem& problem() { return *problem_; }
+
+ private:
+  struct Block {
+    double* data;
+    int size;
+    bool is_pose;
+    bool fixed;
+    bool eliminate;
+  };
+  int register_block(double* data, int size, bool is_pose, bool fixed, bool eliminate);
+
+  std::unique_ptr<ceres::Problem> problem_;
+  std::unique_ptr<ceres::Manifold> pose_manifold_;
+  std::deque<std::array<double, 7>> pose_storage_;
+  std::deque<std::array<double, 3>> point_storage_;
+  std::vector<std::unique_ptr<double[]>> vector_storage_;
+  std::vector<Block> blocks_;
+  std::map<double, std::unique_ptr<ceres::LossFunction>> losses_;
+  std::vector<std::pair<ceres::ResidualBlockId, double>> gated_;
+};
+
+}  // namespace twistslam::optim::detail
