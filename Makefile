@@ -19,7 +19,7 @@ CPP_TEST_BUILD := build/cpp-tests
 help:
 	@echo "make setup   - apt packages, .venv, torch==$(TORCH_VERSION) (CPU), editable install"
 	@echo "make test    - set up if needed, then C++ (ctest) and Python (pytest) tests"
-	@echo "make demo    - run the main job on the bundled default data"
+	@echo "make demo    - simulate (once), run SLAM, evaluate: demo_out/"
 
 setup: apt .stamp-venv .stamp-build
 
@@ -60,7 +60,6 @@ test-python: build
 clean:
 	rm -rf build .stamp-venv .stamp-build
 
-# Bundled default data: the project's shared KITTI tracking files beside the checkout.
-DATA ?= ../shared/data/kitti_tracking
+# The simulator's default urban sequence, generated once into .cache/sim, then SLAM + eval.
 demo: build
-	$(PY) -m twistslam.demo --data $(DATA) --out demo_out
+	$(PY) -m twistslam.demo --out demo_out --cache .cache/sim

@@ -9,6 +9,7 @@ namespace twistslam::bindings {
 void bind_geometry(py::module_& m);
 void bind_features(py::module_& m);
 void bind_optim(py::module_& m);
+void bind_slam(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -22,4 +23,6 @@ PYBIND11_MODULE(_core, m) {
   twistslam::bindings::bind_features(features);
   py::module_ optim = m.def_submodule("optim", "pose-only optimisation and bundle adjustment");
   twistslam::bindings::bind_optim(optim);
+  py::module_ slam = m.def_submodule("slam", "the stereo SLAM system");
+  twistslam::bindings::bind_slam(slam);
 }

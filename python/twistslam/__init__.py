@@ -1,10 +1,20 @@
 """twistslam: dynamic semantic SLAM fusing stereo images and LiDAR (TwistSLAM++).
 
-The C++ core lives in ``twistslam._core``; this package is its typed Python face.
+The C++ core lives in ``twistslam._core``; this package is its typed Python face:
+
+>>> import twistslam                                               # doctest: +SKIP
+>>> result = twistslam.run(("data/sim", "0000"))                   # doctest: +SKIP
+>>> result.camera_poses.shape                                      # doctest: +SKIP
+(100, 4, 4)
 """
 
 from twistslam._core import build_info
 
+from .config import Config
+from .pipeline import run
+from .result import Result
+from .slam import Slam, TrackedFrame
+
 __version__ = "0.1.0"
 
-__all__ = ["build_info", "__version__"]
+__all__ = ["Config", "Result", "Slam", "TrackedFrame", "build_info", "run", "__version__"]

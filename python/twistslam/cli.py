@@ -76,10 +76,64 @@ def _add_eval(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=_run_eval)
 
 
+def _run_run(args: argparse.Namespace) -> int:
+    from .config import Config
+    from .datasets import open_sequence
+    from .pipeline import run
+
+    config = Config.from_yaml(args.config) if args.config else Config()
+    config.override(args.set)
+    sequence = open_sequence(args.root, args.seq, split=args.split)
+    result = run(sequence, config, progress=not args.no_progress)
+    paths = result.save(args.out)
+    t = result.timings.summary()
+    print(f"{result.seq or args.root}: {len(result)} frames, {t['hz']:.1f} Hz "
+          f"(median {t['per_frame_ms']['median']:.1f} ms/frame), {result.num_lost} lost, "
+          f"{int(result.is_keyframe.sum())} keyframes")
+    print(f"wrote {', '.join(p.name for p in paths.values())} in {args.out}")
+    return 0
+
+
+def _add_run(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "run",
+        help="track the camera through a stereo sequence and write the results",
+        description="Stereo SLAM on one KITTI-tracking-layout sequence (real or simulated). "
+        "Writes OUT/camera_poses.txt (what `twistslam eval` reads), OUT/timings.json, "
+        "OUT/config.yaml (the resolved settings) and OUT/status.txt (per-frame status).",
+    )
+    p.add_argument("root", help="dataset root (holding training/calib, image_02, image_03, ...), "
+                   "or a path into one sequence when --seq is not given")
+    p.add_argument("--seq", help="sequence number, e.g. 0000")
+    p.add_argument("--out", required=True, help="results directory")
+    p.add_argument("--split", default="training", help="dataset split folder (default: training)")
+    p.add_argument("--config", metavar="FILE", help="YAML file of settings (partial is fine)")
+    p.add_argument("--set", metavar="SECTION.KEY=VALUE", action="extend", nargs="+", default=[],
+                   help="override a setting after --config, e.g. --set tracking.min_inliers=40 "
+                   "run.max_frames=20 (repeatable)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(handler=_run_run)
+
+
+def _add_sim(sub: argparse._SubParsersAction) -> None:
+    """``twistslam sim``, registered by the simulator itself when it is installed."""
+    try:
+        from .sim.cli import add_sim_parser, run_sim
+    except ModuleNotFoundError as exc:
+        if exc.name in ("twistslam.sim", "twistslam.sim.cli"):
+            return  # a build without the simulator: the other commands still work
+        raise
+    parser = add_sim_parser(sub)
+    if parser is not None and parser.get_default("handler") is None:
+        parser.set_defaults(handler=run_sim)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="twistslam", description="TwistSLAM++ dynamic SLAM")
     sub = parser.add_subparsers(dest="command", required=True, metavar="command")
+    _add_run(sub)
     _add_eval(sub)
+    _add_sim(sub)
     return parser
 
 
@@ -94,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     try:
         return args.handler(args)
-    except (FileNotFoundError, ValueError) as exc:
+    except (FileNotFoundError, FileExistsError, ValueError) as exc:
         print(f"twistslam {args.command}: error: {exc}", file=sys.stderr)
         return 2
     finally:

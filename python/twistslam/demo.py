@@ -1,98 +1,124 @@
-"""``make demo``: the main job on the bundled data, end to end.
+"""``make demo``: the main job end to end on a synthetic sequence with exact ground truth.
 
-Until the SLAM core lands (issue 4), the main job is the evaluation pipeline on real KITTI
-files: the PointRCNN car detections of sequence 0001 (the detector the paper's LiDAR branch
-stands on) are linked into tracks frame to frame with the paper's association rule (nearest
-box centre, valid under 2 m), written in the KITTI tracking result format, read back and
-evaluated against the ground-truth labels. The output is the paper's table layout.
+1. Generate the simulator's default ``urban`` sequence (100 frames, seed 0) once into a cache
+   (``.cache/sim/urban-seed0-n100``; reused when complete, so later demos start at once).
+2. Run stereo SLAM on it (:func:`twistslam.run`).
+3. Evaluate the camera trajectory against the exact ground truth and print the summary table.
 
-Writes ``OUT/results/tracking/0001.txt``, ``OUT/metrics.json``, ``OUT/report.md`` and
-``OUT/plots/*.png``.
+Writes ``OUT/results/`` (camera_poses.txt, timings.json, config.yaml, status.txt),
+``OUT/metrics.json``, ``OUT/report.md`` and ``OUT/plots/*.png``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import sys
-import warnings
 from pathlib import Path
 
-import numpy as np
-from scipy.optimize import linear_sum_assignment
+from .config import Config
+from .pipeline import run
+from .result import Result
 
-from .datasets import ObjectTable, read_detections, write_tracking_results
-
-#: m, centre distance under which a detection continues a track (the paper's 2 m rule)
-ASSOCIATION_GATE = 2.0
-#: detections below this PointRCNN score are dropped (its logit; ~0.5 probability)
-MIN_SCORE = 0.0
-
-
-def link_detections(detections: ObjectTable, gate: float = ASSOCIATION_GATE) -> ObjectTable:
-    """Track ids for per-frame detections: each frame's boxes are assigned to the previous
-    frame's by Hungarian matching on centre distance, pairs farther than ``gate`` metres are
-    not linked, and unlinked boxes start new tracks."""
-    track_id = np.full(len(detections), -1, dtype=np.int64)
-    next_id = 0
-    prev_rows = np.zeros(0, dtype=np.int64)
-    for frame in detections.frames:
-        rows = np.flatnonzero(detections.frame == frame)
-        if len(prev_rows) and len(rows):
-            dist = np.linalg.norm(
-                detections.box_3d[prev_rows, None, :3] - detections.box_3d[None, rows, :3], axis=2
-            )
-            cost = np.where(dist < gate, dist, 1e6)
-            for i, j in zip(*linear_sum_assignment(cost)):
-                if dist[i, j] < gate:
-                    track_id[rows[j]] = track_id[prev_rows[i]]
-        for r in rows[track_id[rows] < 0]:
-            track_id[r] = next_id
-            next_id += 1
-        prev_rows = rows
-    return ObjectTable(**{**vars(detections), "track_id": track_id})
+SCENARIO, FRAMES, SEED, SEQ = "urban", 100, 0, "0000"
+#: written last into a cached sequence: its presence means the sequence is complete
+MARKER = "demo_sequence.json"
+#: Cityscapes ids of movable things (person, rider, car, truck, bus, caravan, trailer, train,
+#: motorcycle, bicycle): the paper tracks the camera on a-priori static clusters only (eq. 3);
+#: the simulator's panoptic images stand in for the segmentation network
+MOVABLE_CLASSES = [24, 25, 26, 27, 28, 29, 30, 31, 32, 33]
 
 
-def run_demo(data_root: Path, out: Path, seq: str = "0001") -> dict:
-    """Link, write, evaluate; returns the metrics dictionary (the ``metrics.json`` layout)."""
+def cached_sequence(cache: Path, scenario: str = SCENARIO, frames: int = FRAMES,
+                    seed: int = SEED, seq: str = SEQ, progress: bool = True) -> Path:
+    """Root of the simulated sequence, generated on first use.
+
+    The sequence is written to a ``.partial`` folder and renamed when complete, so an
+    interrupted generation is never mistaken for a finished one.
+    """
+    from .sim import generate  # the simulator only when a sequence must be made
+
+    key = {"scenario": scenario, "frames": frames, "seed": seed, "seq": seq}
+    root = cache / f"{scenario}-seed{seed}-n{frames}"
+    marker = root / MARKER
+    if marker.is_file() and json.loads(marker.read_text(encoding="utf-8")) == key:
+        print(f"demo: using the cached sequence {root}")
+        return root
+    partial = root.with_name(root.name + ".partial")
+    shutil.rmtree(partial, ignore_errors=True)
+    print(f"demo: generating the {scenario} sequence ({frames} frames, seed {seed}) "
+          f"into {root} (once)")
+    generate(partial, scenario=scenario, frames=frames, seed=seed, seq=seq, progress=progress)
+    (partial / MARKER).write_text(json.dumps(key) + "\n", encoding="utf-8")
+    shutil.rmtree(root, ignore_errors=True)
+    partial.rename(root)
+    return root
+
+
+def demo_config() -> Config:
+    """Defaults, with the simulator's panoptic labels masking movable objects."""
+    return Config().override({"tracking.dynamic_class_ids": MOVABLE_CLASSES})
+
+
+def _run_markdown(result: Result) -> str:
+    t = result.timings.summary()
+    lines = [
+        "", "### Run", "",
+        f"{len(result)} frames, {result.num_lost} lost, {int(result.is_keyframe.sum())} "
+        f"keyframes; {t['hz']:.1f} Hz, per frame median {t['per_frame_ms']['median']:.1f} ms, "
+        f"p90 {t['per_frame_ms']['p90']:.1f} ms, max {t['per_frame_ms']['max']:.1f} ms.", "",
+        "| stage | median ms |", "|---|---:|",
+        *(f"| {name} | {ms:.2f} |" for name, ms in t["stages"].items() if ms is not None), "",
+    ]
+    return "\n".join(lines)
+
+
+def run_demo(out: Path, *, cache: Path = Path(".cache/sim"), frames: int = FRAMES,
+             progress: bool = True) -> dict:
+    """Generate (once), run, evaluate; returns the ``metrics.json`` dictionary."""
     from .eval.plots import plot_trajectories
     from .eval.report import render_markdown, render_text
     from .eval.sequence import evaluate_sequence
 
-    det_path = data_root / "detections" / "pointrcnn_car_val" / f"{seq}.txt"
-    detections = read_detections(det_path)
-    detections = detections.select(detections.score >= MIN_SCORE)
-    tracks = link_detections(detections)
-    results = out / "results"
-    write_tracking_results(results / "tracking" / f"{seq}.txt", tracks)
-    print(f"{det_path.name}: {len(detections)} detections linked into "
-          f"{len(tracks.track_ids)} tracks -> {results / 'tracking' / f'{seq}.txt'}")
+    out, cache = Path(out), Path(cache)
+    root = cached_sequence(cache, frames=frames, progress=progress)
+    result = run((root, SEQ), demo_config(), progress=progress)
+    result.save(out / "results")
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the bundled data has no oxts: said in the report
-        metrics = evaluate_sequence(data_root, results, seq)
+    metrics = evaluate_sequence(root, out / "results", SEQ)
+    summary = metrics.to_dict()
+    summary["run"] = {"frames": len(result), "lost": result.num_lost,
+                      "keyframes": int(result.is_keyframe.sum()),
+                      "timings": result.timings.summary()}
     print(render_text(metrics), end="")
-    as_dict = metrics.to_dict()
-    (out / "metrics.json").write_text(json.dumps(as_dict, indent=2) + "\n", encoding="utf-8")
-    (out / "report.md").write_text(render_markdown(metrics), encoding="utf-8")
+    t = summary["run"]["timings"]
+    print(f"{len(result)} frames, {result.num_lost} lost, {t['hz']:.1f} Hz "
+          f"(median {t['per_frame_ms']['median']:.1f} ms/frame)")
+    (out / "metrics.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    (out / "report.md").write_text(render_markdown(metrics) + _run_markdown(result),
+                                   encoding="utf-8")
     plots = plot_trajectories(metrics, out / "plots")
-    print(f"wrote {out / 'metrics.json'}, {out / 'report.md'}, {len(plots)} plot(s) in {out / 'plots'}")
-    return as_dict
+    print(f"wrote {out / 'metrics.json'}, {out / 'report.md'}, {len(plots)} plot(s) in "
+          f"{out / 'plots'}, results in {out / 'results'}")
+    return summary
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m twistslam.demo", description=__doc__.split("\n")[0])
-    parser.add_argument("--data", default="../shared/data/kitti_tracking", help="KITTI tracking root")
+    parser = argparse.ArgumentParser(prog="python -m twistslam.demo",
+                                     description=__doc__.split("\n")[0])
     parser.add_argument("--out", default="demo_out", help="output directory")
-    parser.add_argument("--seq", default="0001")
+    parser.add_argument("--cache", default=".cache/sim", help="where simulated sequences are kept")
+    parser.add_argument("--frames", type=int, default=FRAMES, help="frames of the sequence")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bars")
     args = parser.parse_args(argv)
-    data = Path(args.data)
-    if not (data / "training" / "calib").is_dir():
-        print(f"demo: no KITTI tracking data at {data} (expected {data}/training/calib)", file=sys.stderr)
-        return 2
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    run_demo(data, out, args.seq)
+    try:
+        run_demo(out, cache=Path(args.cache), frames=args.frames, progress=not args.no_progress)
+    except (FileNotFoundError, ValueError) as exc:
+        print(f"demo: error: {exc}", file=sys.stderr)
+        return 2
     return 0
 
 

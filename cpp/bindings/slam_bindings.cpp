@@ -1,0 +1,153 @@
+// Bindings of cpp/tracking: the stereo SLAM System, one track() call per frame.
+#include <pybind11/stl.h>
+
+#include <opencv2/core/mat.hpp>
+
+#include "bindings/numpy_checks.hpp"
+#include "bindings/slam_options.hpp"
+#include "tracking/system.hpp"
+
+namespace twistslam::bindings {
+using namespace pybind11::literals;
+namespace t = twistslam::tracking;
+
+namespace {
+
+// Zero-copy cv::Mat view of a C-contiguous numpy image; the array must outlive the view.
+cv::Mat image_view(const py::array& a, const char* name, bool labels) {
+  const bool ok_dtype = labels ? py::isinstance<py::array_t<std::int32_t>>(a) : py::isinstance<py::array_t<std::uint8_t>>(a);
+  const bool ok_shape = a.ndim() == 2 || (!labels && a.ndim() == 3 && a.shape(2) == 3);
+  if (!ok_dtype || !ok_shape) {
+    throw py::value_error(std::string(name) + ": expected " +
+                          (labels ? "int32 (H, W)" : "uint8 (H, W) or (H, W, 3)") + ", got " +
+                          std::string(py::str(a.dtype())) + " " + shape_string(a));
+  }
+  if (!(a.flags() & py::array::c_style)) throw py::value_error(std::string(name) + ": array must be C-contiguous");
+  if (a.shape(0) == 0 || a.shape(1) == 0) throw py::value_error(std::string(name) + ": empty image");
+  const int type = labels ? CV_32SC1 : (a.ndim() == 3 ? CV_8UC3 : CV_8UC1);
+  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), type, const_cast<void*>(a.data()));
+}
+
+py::dict to_dict(const t::TrackResult& r) {
+  py::dict timings;
+  for (const auto& [stage, ms] : r.timings_ms) timings[py::str(stage)] = ms;
+  return py::dict("status"_a = t::to_string(r.status), "T_w_c"_a = to_numpy(r.T_w_c),
+                  "is_keyframe"_a = r.is_keyframe, "num_inliers"_a = r.num_inliers,
+                  "num_map_points"_a = r.num_map_points, "num_keyframes"_a = r.num_keyframes,
+                  "timings_ms"_a = timings);
+}
+
+}  // namespace
+
+void bind_slam(py::module_& m) {
+  m.def("default_options", &default_slam_options,
+        "The C++ defaults of every option, nested {section: {key: value}} as System() takes them.");
+  py::class_<t::System>(m, "System", "Stereo SLAM: camera tracking on static points, keyframes, local BA.")
+      .def(py::init([](const geometry::StereoCamera& camera, const py::dict& options) {
+             return std::make_unique<t::System>(camera, parse_slam_options(options));
+           }),
+           "camera"_a, "options"_a = py::dict(),
+           R"doc(Create a SLAM system.
+
+Parameters
+----------
+camera : twistslam.geometry.StereoCamera
+    Rectified stereo pair with the image size set.
+options : dict
+    Nested ``{section: {key: value}}`` (sections orb, stereo, tracking, keyframes, local_ba,
+    map); see ``twistslam.Config.to_options()``. Unknown keys raise ValueError.
+)doc")
+      .def("track",
+           [](t::System& s, int index, double timestamp, const py::array& left, const py::array& right,
+              const py::object& labels) {
+             const cv::Mat l = image_view(left, "image_left", false);
+             const cv::Mat r = image_view(right, "image_right", false);
+             py::array label_array;
+             cv::Mat lab;
+             if (!labels.is_none()) {
+               label_array = py::array::ensure(labels);
+               lab = image_view(label_array, "labels", true);
+             }
+             t::TrackResult result;
+             {
+               py::gil_scoped_release release;
+               try {
+                 result = s.track(index, timestamp, l, r, lab);
+               } catch (const std::invalid_argument& e) {
+                 py::gil_scoped_acquire acquire;
+                 throw py::value_error("frame " + std::to_string(index) + ": " + e.what());
+               }
+             }
+             return to_dict(result);
+           },
+           "index"_a, "timestamp"_a, "image_left"_a, "image_right"_a, "labels"_a = py::none(),
+           R"doc(Track one stereo frame.
+
+Parameters
+----------
+index : int
+    Frame index in the sequence.
+timestamp : float
+    Seconds.
+image_left, image_right : ndarray
+    uint8 (H, W) gray or (H, W, 3) colour, C-contiguous, of the camera's size.
+labels : ndarray of int32 (H, W), optional
+    Semantic class id per pixel; keypoints on ``tracking.dynamic_class_ids`` never track the camera.
+
+Returns
+-------
+dict
+    status ("initialized", "ok", "lost", "relocalized"), T_w_c (4, 4), is_keyframe,
+    num_inliers, num_map_points, num_keyframes, timings_ms {stage: ms}.
+)doc")
+      .def("trajectory",
+           [](const t::System& s) {
+             const auto traj = s.trajectory();
+             DoubleArray poses = new_array({static_cast<py::ssize_t>(traj.size()), 4, 4});
+             py::array_t<std::int64_t> frames(static_cast<py::ssize_t>(traj.size()));
+             py::list status;
+             for (size_t i = 0; i < traj.size(); ++i) {
+               frames.mutable_data()[i] = traj[i].first.frame_index;
+               status.append(t::to_string(traj[i].first.status));
+               for (int r = 0; r < 4; ++r)
+                 for (int c = 0; c < 4; ++c) poses.mutable_data()[i * 16 + r * 4 + c] = traj[i].second(r, c);
+             }
+             return py::dict("frame_index"_a = frames, "T_w_c"_a = poses, "status"_a = status);
+           },
+           "Poses T_w_c (N, 4, 4) of every tracked frame, refined through their reference keyframes.")
+      .def("keyframes",
+           [](const t::System& s) {
+             const auto ids = s.map().keyframe_ids();
+             DoubleArray poses = new_array({static_cast<py::ssize_t>(ids.size()), 4, 4});
+             py::array_t<std::int64_t> frames(static_cast<py::ssize_t>(ids.size()));
+             for (size_t i = 0; i < ids.size(); ++i) {
+               const auto& kf = s.map().keyframe(ids[i]);
+               frames.mutable_data()[i] = kf.frame_index;
+               const Mat4 T = kf.T_w_c();
+               for (int r = 0; r < 4; ++r)
+                 for (int c = 0; c < 4; ++c) poses.mutable_data()[i * 16 + r * 4 + c] = T(r, c);
+             }
+             return py::dict("frame_index"_a = frames, "T_w_c"_a = poses);
+           },
+           "Keyframes: frame_index (K,) and T_w_c (K, 4, 4).")
+      .def("map_points",
+           [](const t::System& s) {
+             const auto& pts = s.map().points();
+             const auto n = static_cast<py::ssize_t>(pts.size());
+             DoubleArray X = new_array({n, 3});
+             py::array_t<std::int64_t> cluster(n), nobs(n), label(n);
+             py::ssize_t i = 0;
+             for (const auto& [id, p] : pts) {
+               for (int k = 0; k < 3; ++k) X.mutable_data()[3 * i + k] = p.X_w[k];
+               cluster.mutable_data()[i] = p.cluster_id;
+               label.mutable_data()[i] = p.label;
+               nobs.mutable_data()[i] = static_cast<std::int64_t>(p.observations.size());
+               ++i;
+             }
+             return py::dict("X_w"_a = X, "cluster_id"_a = cluster, "label"_a = label, "num_observations"_a = nobs);
+           },
+           "Map points: X_w (M, 3), cluster_id (M,), label (M,), num_observations (M,).")
+      .def("reset", &t::System::reset, "Forget the map and start again at the next frame.");
+}
+
+}  // namespace twistslam::bindings

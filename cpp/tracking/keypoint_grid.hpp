@@ -1,0 +1,21 @@
+#pragma once
+// Uniform grid over the image for radius queries on keypoints (projection matching).
+#include <vector>
+
+#include "geometry/types.hpp"
+
+namespace twistslam::tracking {
+
+class KeypointGrid {
+ public:
+  void build(const std::vector<Vec2>& uv, int width, int height, int cell_px = 32);
+  // Indices of keypoints within `radius` px of (u, v) (square window, then exact distance).
+  void query(double u, double v, double radius, std::vector<int>* out) const;
+
+ private:
+  int cell_ = 32, cols_ = 0, rows_ = 0;
+  std::vector<std::vector<int>> cells_;
+  const std::vector<Vec2>* uv_ = nullptr;
+};
+
+}  // namespace twistslam::tracking

@@ -1,0 +1,432 @@
+"""Typed configuration of the SLAM system: every threshold and weight, named, with its default.
+
+A :class:`Config` is one dataclass per section (``orb``, ``stereo``, ``tracking``,
+``keyframes``, ``local_ba``, ``map``, ``run``). Each field carries its unit and the reason for
+its default (``dataclasses.fields(...)[i].metadata``), and both are written as comments into
+the YAML that :meth:`Config.to_yaml` saves beside every result. The C++ core receives all
+sections but ``run`` as the nested dictionary :meth:`Config.to_options`; this module is the
+single place where those names and defaults are defined.
+
+>>> cfg = Config()
+>>> cfg.override(["tracking.min_inliers=40", "run.max_frames=20"]).tracking.min_inliers
+40
+"""
+
+from __future__ import annotations
+
+import math
+import types
+import typing
+from collections.abc import Iterable, Mapping
+from dataclasses import MISSING, dataclass, field, fields
+from pathlib import Path
+from typing import Any, Union
+
+
+def param(default: Any, why: str, unit: str = "", *, lo: float | None = None,
+          hi: float | None = None) -> Any:
+    """A config field: ``default``, the one-line reason for it, its unit and its valid range."""
+    meta = {"why": why, "unit": unit, "lo": lo, "hi": hi}
+    if isinstance(default, list):
+        return field(default_factory=lambda: list(default), metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+@dataclass
+class OrbConfig:
+    """ORB feature extraction (per image, on a scale pyramid)."""
+
+    num_features: int = param(2000, "ORB-SLAM2's setting for KITTI stereo", lo=1)
+    scale_factor: float = param(1.2, "ORB-SLAM2's pyramid ratio: fine scale steps", lo=1.0001)
+    num_levels: int = param(8, "1.2^7 = 3.6x scale range, ORB-SLAM2's setting", lo=1)
+    fast_threshold: int = param(20, "FAST contrast, ORB-SLAM2's iniThFAST", "grey levels", lo=1)
+    min_fast_threshold: int = param(
+        7, "retry threshold in low-texture cells, ORB-SLAM2's minThFAST", "grey levels", lo=1)
+    cell_size: int = param(35, "grid cell that spreads features over the image, as ORB-SLAM2",
+                           "px", lo=4)
+
+
+@dataclass
+class StereoConfig:
+    """Left-right matching along the rectified rows (docs/features.md)."""
+
+    max_hamming: int = param(75, "half-way between ORB's strict 50 and loose 100: the views of "
+                             "a 0.5 m baseline differ little, the SAD check removes the rest",
+                             "bits", lo=0, hi=256)
+    row_radius: float = param(2.0, "row band searched in the right image: FAST's 1-px "
+                              "localisation at coarse levels plus KITTI's vertical offset",
+                              "px", lo=0.0)
+    octave_tolerance: int = param(1, "both views see a surface at almost the same scale",
+                                  "levels", lo=0)
+    patch_radius: int = param(7, "half width of the 15x5 SAD window: sub-pixel accurate on "
+                              "surfaces slanted in depth such as the road", "px", lo=1)
+    patch_half_height: int = param(2, "half height of the 15x5 SAD window: a tall window smears "
+                                   "the disparity change of slanted surfaces", "px", lo=0)
+    refine_range: int = param(5, "SAD search of +-5 px around the descriptor match, room to "
+                              "reject minima on the border", "px", lo=1)
+    min_depth: float = param(0.5, "nearer is the ego car's own bonnet", "m", lo=0.0)
+    max_depth: float = param(80.0, "disparity ~5 px at 80 m on KITTI: depth too uncertain beyond",
+                             "m", lo=0.0)
+    outlier_factor: float = param(2.1, "drop matches whose normalised SAD exceeds 2.1x the "
+                                  "frame's median (~1.5 robust sigma)", lo=0.0)
+    right_features_factor: float = param(
+        2.0, "the right image gets 2x keypoints as match candidates: ~63 % -> ~77 % matched",
+        lo=0.1)
+
+
+@dataclass
+class TrackingConfig:
+    """Camera tracking from static points (paper eq. 3): motion model, then local map."""
+
+    min_inliers: int = param(30, "below this the frame is lost (ORB-SLAM2's local-map test)", lo=1)
+    min_init_points: int = param(
+        100, "stereo points needed to start (or restart) a map: fewer cannot carry tracking",
+        "points", lo=1)
+    search_radius_px: float = param(
+        15.0, "projection search window of the constant-velocity model", "px", lo=0.0)
+    local_map_search_radius_px: float = param(
+        4.0, "the pose is already refined: small window against the local map", "px", lo=0.0)
+    max_hamming: int = param(40, "stricter than ORB-SLAM2's 50: repetitive facades gave wrong "
+                             "matches that survived the chi-square test", "bits", lo=0, hi=256)
+    ratio_test: float = param(0.7, "best / second-best distance; 0.9 let repetitive texture "
+                              "through (simulator: -40 % rotation error at 0.7)", lo=0.0, hi=1.0)
+    pose_rounds: int = param(4, "pose-only optimisation rounds re-classifying outliers, as ORB-SLAM2",
+                             lo=1)
+    chi2_stereo: float = param(7.815, "95 % quantile of chi-square, 3 DoF (u_l, v, u_r)", lo=0.0)
+    chi2_mono: float = param(5.991, "95 % quantile of chi-square, 2 DoF (u, v)", lo=0.0)
+    close_depth_baselines: float = param(
+        40.0, "keypoints nearer than 40 baselines are 'close' for the keyframe rule "
+        "(ORB-SLAM's); every stereo match still becomes a map point", "baselines",
+        lo=0.0)
+    dynamic_class_ids: list[int] = param(
+        [], "panoptic classes whose pixels give no points to camera tracking (eq. 3); "
+        "none until a segmenter is configured")
+
+
+@dataclass
+class KeyframeConfig:
+    """When a frame becomes a keyframe (temporal and spatial, as TwistSLAM)."""
+
+    max_frames_between: int = param(
+        2, "temporal keyframe at least every 2 frames: the local BA is what removes the "
+        "per-frame tracking noise (simulator: RPE halves from 5 to 2, at ~25 ms per frame)",
+        "frames", lo=1)
+    min_tracked_ratio: float = param(
+        0.75, "spatial keyframe when tracked points drop below this fraction of the "
+        "reference keyframe's (ORB-SLAM2 stereo)", lo=0.0, hi=1.0)
+    min_close_tracked: int = param(
+        100, "insert when fewer close points than this are tracked (ORB-SLAM2 stereo)", lo=0)
+    min_new_close: int = param(
+        70, "... and at least this many new close points could be created (ORB-SLAM2)", lo=0)
+
+
+@dataclass
+class LocalBAConfig:
+    """Local bundle adjustment after each keyframe."""
+
+    window: int = param(10, "keyframes optimised: bounded cost per keyframe", "keyframes", lo=1)
+    max_fixed: int = param(20, "covisible keyframes held fixed to anchor the gauge", "keyframes",
+                           lo=0)
+    iterations_first: int = param(5, "before outlier removal, as ORB-SLAM2", lo=0)
+    iterations_second: int = param(10, "after outlier removal, as ORB-SLAM2", lo=0)
+    huber_stereo: float = param(2.796, "sqrt(7.815): Huber kink at the stereo chi-square gate",
+                                "px", lo=0.0)
+    huber_mono: float = param(2.448, "sqrt(5.991): Huber kink at the mono chi-square gate", "px",
+                              lo=0.0)
+    num_threads: int = param(2, "Ceres threads; tracking keeps the other cores", lo=1)
+
+
+@dataclass
+class MapConfig:
+    """Map point creation and culling."""
+
+    min_found_ratio: float = param(
+        0.25, "cull points found in fewer than 1/4 of the frames that should see them (ORB-SLAM2)",
+        lo=0.0, hi=1.0)
+    cull_after_keyframes: int = param(
+        2, "a new point is judged after 2 more keyframes (ORB-SLAM2)", "keyframes", lo=0)
+    max_points: int = param(200000, "memory bound of the map (~100 MB of descriptors and "
+                            "observations)", "points", lo=1)
+
+
+@dataclass
+class RunConfig:
+    """The sequence loop in Python (not sent to the core)."""
+
+    max_frames: int | None = param(None, "None: the whole sequence", "frames", lo=1)
+    start_frame: int = param(0, "KITTI frame index to start from", lo=0)
+    use_labels: bool = param(
+        True, "read the per-frame panoptic image, when present, to mask dynamic_class_ids")
+    labels_dir: str = param("panoptic", "folder beside image_02 holding <seq>/NNNNNN.png, "
+                            "the simulator's layout")
+
+
+#: section name -> dataclass, in the order of the YAML file
+SECTIONS: dict[str, type] = {
+    "orb": OrbConfig,
+    "stereo": StereoConfig,
+    "tracking": TrackingConfig,
+    "keyframes": KeyframeConfig,
+    "local_ba": LocalBAConfig,
+    "map": MapConfig,
+    "run": RunConfig,
+}
+_NOT_FOR_CORE = ("run",)
+_TRUE = {"true", "yes", "on", "1"}
+_FALSE = {"false", "no", "off", "0"}
+
+
+@dataclass
+class Config:
+    """Every setting of a run; ``Config()`` holds the defaults.
+
+    Build one from defaults, a YAML file (:meth:`from_yaml`, partial files allowed) or a
+    dictionary (:meth:`from_dict`), then adjust it with :meth:`override`. Unknown sections or
+    keys and values of the wrong type or out of range raise ``ValueError`` naming the key and
+    what is allowed.
+    """
+
+    orb: OrbConfig = field(default_factory=OrbConfig)
+    stereo: StereoConfig = field(default_factory=StereoConfig)
+    tracking: TrackingConfig = field(default_factory=TrackingConfig)
+    keyframes: KeyframeConfig = field(default_factory=KeyframeConfig)
+    local_ba: LocalBAConfig = field(default_factory=LocalBAConfig)
+    map: MapConfig = field(default_factory=MapConfig)
+    run: RunConfig = field(default_factory=RunConfig)
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any] | None) -> "Config":
+        """Defaults updated with a nested ``{section: {key: value}}`` mapping."""
+        config = cls()
+        if data is None:
+            return config
+        if not isinstance(data, Mapping):
+            raise ValueError(f"config: expected a mapping of sections, got {type(data).__name__}")
+        for name, values in data.items():
+            _section_type(name)  # unknown section -> ValueError
+            if values is None:
+                continue
+            if not isinstance(values, Mapping):
+                raise ValueError(f"config section {name!r}: expected a mapping of keys, "
+                                 f"got {values!r}")
+            for key, value in values.items():
+                config._set(f"{name}.{key}", value)
+        config.validate()
+        return config
+
+    @classmethod
+    def from_yaml(cls, path: str | Path) -> "Config":
+        """Defaults updated with the sections and keys a YAML file gives."""
+        import yaml
+
+        path = Path(path)
+        try:
+            data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        except yaml.YAMLError as exc:
+            raise ValueError(f"{path}: not valid YAML: {exc}") from None
+        try:
+            return cls.from_dict(data)
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from None
+
+    # ---------------------------------------------------------------------- changes
+    def override(self, items: str | Iterable[str] | Mapping[str, Any]) -> "Config":
+        """Set values by dotted key, in place; returns ``self`` for chaining.
+
+        Parameters
+        ----------
+        items
+            ``"section.key=value"``, a list of such strings (the command line's ``--set``),
+            or a mapping ``{"section.key": value}``. A string value is converted with the
+            field's type: ``int``, ``float``, ``bool`` (true/false/yes/no/on/off/1/0),
+            ``str``, lists as ``[1, 2]`` or ``1,2``, and ``none``/``null`` where allowed.
+        """
+        if isinstance(items, str):
+            items = [items]
+        if isinstance(items, Mapping):
+            pairs = list(items.items())
+        else:
+            pairs = []
+            for item in items:
+                key, sep, value = str(item).partition("=")
+                if not sep or "." not in key:
+                    raise ValueError(f"expected section.key=value, got {item!r}")
+                pairs.append((key.strip(), value.strip()))
+        # applied to a copy first: a bad item leaves this config as it was
+        trial = Config.from_dict(self.to_dict())
+        for key, value in pairs:
+            trial._set(key, value)
+        trial.validate()
+        for name in SECTIONS:
+            setattr(self, name, getattr(trial, name))
+        return self
+
+    def _set(self, dotted: str, value: Any) -> None:
+        section_name, _, key = dotted.partition(".")
+        section_type = _section_type(section_name)
+        types_ = typing.get_type_hints(section_type)
+        if key not in types_:
+            raise ValueError(
+                f"unknown key {dotted!r}; keys of section {section_name!r}: "
+                + ", ".join(f.name for f in fields(section_type))
+            )
+        setattr(getattr(self, section_name), key, _coerce(value, types_[key], dotted))
+
+    def validate(self) -> None:
+        """Check every value's type and range; raises ``ValueError`` naming the key."""
+        for name, section_type in SECTIONS.items():
+            section = getattr(self, name)
+            if not isinstance(section, section_type):
+                raise ValueError(f"config section {name!r}: expected {section_type.__name__}")
+            types_ = typing.get_type_hints(section_type)
+            for f in fields(section_type):
+                key = f"{name}.{f.name}"
+                value = _coerce(getattr(section, f.name), types_[f.name], key)
+                setattr(section, f.name, value)
+                _check_range(value, f.metadata, key)
+        if self.stereo.min_depth >= self.stereo.max_depth:
+            raise ValueError(f"stereo.min_depth ({self.stereo.min_depth}) must be below "
+                             f"stereo.max_depth ({self.stereo.max_depth})")
+        if self.orb.min_fast_threshold > self.orb.fast_threshold:
+            raise ValueError("orb.min_fast_threshold must not exceed orb.fast_threshold")
+
+    # ---------------------------------------------------------------------- output
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        """Nested plain dictionary of every section (lists copied)."""
+        return {
+            name: {f.name: _plain(getattr(getattr(self, name), f.name))
+                   for f in fields(SECTIONS[name])}
+            for name in SECTIONS
+        }
+
+    def to_options(self) -> dict[str, dict[str, Any]]:
+        """The nested options dictionary the C++ core reads (every section but ``run``)."""
+        return {k: v for k, v in self.to_dict().items() if k not in _NOT_FOR_CORE}
+
+    def to_yaml(self, path: str | Path | None = None) -> str:
+        """YAML text of every setting, each with its unit and reason as a comment; written to
+        ``path`` when given. :meth:`from_yaml` reads it back to an equal config."""
+        lines = ["# twistslam configuration: every setting with its unit and the reason for "
+                 "its default", ""]
+        for name, section_type in SECTIONS.items():
+            lines.append(f"{name}:  # {section_type.__doc__.strip().splitlines()[0]}")
+            for f in fields(section_type):
+                value = _yaml_scalar(getattr(getattr(self, name), f.name))
+                unit = f"[{f.metadata['unit']}] " if f.metadata.get("unit") else ""
+                lines.append(f"  {f.name}: {value}  # {unit}{f.metadata.get('why', '')}".rstrip())
+            lines.append("")
+        text = "\n".join(lines)
+        if path is not None:
+            path = Path(path)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text, encoding="utf-8")
+        return text
+
+    @staticmethod
+    def describe(dotted: str) -> dict[str, Any]:
+        """Default, unit, reason and range of one setting, e.g. ``"tracking.min_inliers"``."""
+        section_name, _, key = dotted.partition(".")
+        for f in fields(_section_type(section_name)):
+            if f.name == key:
+                default = f.default if f.default is not MISSING else f.default_factory()
+                return {"default": default, **f.metadata}
+        raise ValueError(f"unknown key {dotted!r}")
+
+
+# ------------------------------------------------------------------------- helpers
+def _section_type(name: str) -> type:
+    if name not in SECTIONS:
+        raise ValueError(f"unknown config section {name!r}; sections: {', '.join(SECTIONS)}")
+    return SECTIONS[name]
+
+
+def _plain(value: Any) -> Any:
+    return list(value) if isinstance(value, (list, tuple)) else value
+
+
+def _yaml_scalar(value: Any) -> str:
+    """Flow-style YAML of the value types a config holds (JSON strings are valid YAML)."""
+    import json
+
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_yaml_scalar(v) for v in value) + "]"
+    if isinstance(value, float):
+        if math.isinf(value):
+            return ".inf" if value > 0 else "-.inf"
+        return repr(value)
+    if isinstance(value, int):
+        return str(value)
+    return json.dumps(str(value))
+
+
+def _type_name(tp: Any) -> str:
+    return getattr(tp, "__name__", None) or str(tp).replace("typing.", "")
+
+
+def _coerce(value: Any, tp: Any, key: str) -> Any:
+    """``value`` (typed, or a string from the command line) as type ``tp``."""
+    origin = typing.get_origin(tp)
+    if origin in (Union, types.UnionType):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        if value is None or (isinstance(value, str) and value.strip().lower() in ("none", "null", "")):
+            return None
+        return _coerce(value, args[0], key)
+    if origin is list:
+        (item_type,) = typing.get_args(tp)
+        if isinstance(value, str):
+            text = value.strip().strip("[]").strip()
+            value = [v.strip() for v in text.split(",")] if text else []
+        elif not isinstance(value, (list, tuple)):
+            value = [value]
+        return [_coerce(v, item_type, f"{key}[{i}]") for i, v in enumerate(value)]
+    bad = ValueError(f"{key}: expected {_type_name(tp)}, got {value!r}")
+    if tp is bool:
+        if isinstance(value, bool):
+            return value
+        if isinstance(value, str) and value.strip().lower() in _TRUE | _FALSE:
+            return value.strip().lower() in _TRUE
+        if isinstance(value, int) and value in (0, 1):
+            return bool(value)
+        raise bad
+    if isinstance(value, bool) or value is None:
+        raise bad  # True is an int in Python; never a count or a threshold here
+    if tp is int:
+        if isinstance(value, str):
+            try:
+                value = float(value.strip()) if any(c in value for c in ".eE") else int(value)
+            except ValueError:
+                raise bad from None
+        if isinstance(value, float) and value.is_integer():
+            return int(value)
+        if isinstance(value, int):
+            return value
+        raise bad
+    if tp is float:
+        try:
+            return float(value)
+        except (TypeError, ValueError):
+            raise bad from None
+    if tp is str:
+        if isinstance(value, (str, int, float)):
+            return str(value)
+        raise bad
+    raise TypeError(f"{key}: unsupported config type {tp!r}")  # a bug in this module
+
+
+def _check_range(value: Any, meta: Mapping[str, Any], key: str) -> None:
+    lo, hi = meta.get("lo"), meta.get("hi")
+    items = value if isinstance(value, list) else [value]
+    for v in items:
+        if v is None or isinstance(v, (str, bool)):
+            continue
+        if (lo is not None and v < lo) or (hi is not None and v > hi) or v != v:
+            bounds = f"[{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
+            raise ValueError(f"{key} = {v} is out of range {bounds}")

@@ -1,0 +1,159 @@
+"""``twistslam.run``: a whole sequence through the SLAM system, frame by frame.
+
+>>> result = twistslam.run("data/sim", config=None)        # doctest: +SKIP
+>>> result.camera_poses.shape, result.status[:3]           # doctest: +SKIP
+((100, 4, 4), array(['initialized', 'ok', 'ok'], dtype='<U11'))
+>>> result.save("results/0000")                            # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .config import Config
+from .datasets import Frame, Sequence, open_sequence
+from .inputs import PanopticLabels, check_stereo, load_frame
+from .progress import RateBar
+from .result import Result
+from .slam import Slam
+from .timings import Timings
+
+SequenceLike = Sequence | str | Path | tuple[Any, Any]
+
+
+def _open(seq_or_path: SequenceLike) -> Sequence:
+    if isinstance(seq_or_path, tuple):
+        if len(seq_or_path) != 2:
+            raise ValueError(f"expected (root, seq), got a tuple of {len(seq_or_path)} items")
+        return open_sequence(*seq_or_path)
+    return open_sequence(seq_or_path)
+
+
+def _config(config: Config | str | Path | dict | None) -> Config:
+    if config is None:
+        return Config()
+    if isinstance(config, Config):
+        return Config.from_dict(config.to_dict())  # a copy: the run never edits the caller's
+    if isinstance(config, dict):
+        return Config.from_dict(config)
+    return Config.from_yaml(config)
+
+
+def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | None
+                ) -> Iterator[tuple[Frame, np.ndarray | None, float]]:
+    """``(frame, class_ids, load_ms)`` per index; frame i+1 is read in a background thread
+    while the caller tracks frame i (decoding the PNGs costs about as much as tracking, and
+    both the decoder and the core release the GIL)."""
+    def load(i: int):
+        start = time.perf_counter()
+        frame = load_frame(sequence, i)
+        class_ids = labels.read(i) if labels is not None else None
+        return frame, class_ids, (time.perf_counter() - start) * 1e3
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        pending = pool.submit(load, indices[0]) if len(indices) else None
+        for k in range(len(indices)):
+            item = pending.result()  # re-raises a loading error, naming the frame
+            if k + 1 < len(indices):
+                pending = pool.submit(load, indices[k + 1])
+            yield item
+
+
+def frame_range(config: Config, length: int) -> range:
+    """Dataset frame indices a run covers (``run.start_frame``, ``run.max_frames``)."""
+    start = config.run.start_frame
+    if start >= length:
+        raise ValueError(f"run.start_frame = {start} but the sequence has {length} frames")
+    stop = length if config.run.max_frames is None else min(length, start + config.run.max_frames)
+    return range(start, stop)
+
+
+def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = None,
+        progress: bool = True) -> Result:
+    """Track the camera through a stereo sequence.
+
+    Parameters
+    ----------
+    seq_or_path
+        An opened sequence (e.g. :class:`~twistslam.datasets.KittiTracking`), a path into
+        one (``.../training/image_02/0001``), or a ``(root, seq)`` pair.
+    config
+        A :class:`Config`, a YAML file of overrides, a nested dict, or ``None`` (defaults).
+    progress
+        Show a progress bar with the running rate in Hz.
+
+    Returns
+    -------
+    Result
+        Poses, per-frame status, timings, keyframes, map points and the resolved config.
+
+    Raises
+    ------
+    FileNotFoundError
+        A whole camera is missing (before any frame is tracked), or an image of one frame.
+    ValueError
+        An unreadable file, an image of the wrong size (both naming the frame), or a bad
+        config value. A blank or textureless frame is not an error: it is flagged ``"lost"``,
+        its pose predicted, and tracking restarts from the next good frame.
+    """
+    sequence = _open(seq_or_path)
+    config = _config(config)
+    check_stereo(sequence)
+    indices = frame_range(config, len(sequence))
+    labels = None
+    if config.run.use_labels and config.tracking.dynamic_class_ids:
+        # only worth reading when some classes are masked
+        labels = PanopticLabels.find(sequence, config.run.labels_dir)
+        if labels is None:
+            warnings.warn(f"{sequence}: tracking.dynamic_class_ids is set but the sequence has "
+                          f"no {config.run.labels_dir}/ labels; frames are tracked unmasked",
+                          stacklevel=2)
+    slam = Slam(config, sequence.calib)
+    name = getattr(sequence, "seq", None)
+
+    tracked, stages, frame_ms = [], [], []
+    with RateBar(len(indices), f"seq {name}" if name else "run", enabled=progress) as bar:
+        last = time.perf_counter()
+        for frame, class_ids, load_ms in _prefetched(sequence, indices, labels):
+            out = slam.track(frame, class_ids)
+            now = time.perf_counter()
+            frame_ms.append((now - last) * 1e3)
+            last = now
+            stages.append({"load": load_ms, **out.timings_ms})
+            tracked.append(out)
+            bar.step(frame_ms[-1], out.status)
+
+    tracked_poses = np.stack([t.T_w_c for t in tracked])
+    return Result(
+        camera_poses=_refined(slam.trajectory(), [t.index for t in tracked], tracked_poses),
+        tracked_poses=tracked_poses,
+        status=np.array([t.status for t in tracked]),
+        frames=np.array([t.index for t in tracked], dtype=np.int64),
+        is_keyframe=np.array([t.is_keyframe for t in tracked], dtype=bool),
+        num_inliers=np.array([t.num_inliers for t in tracked], dtype=np.int64),
+        timings=Timings.from_frames(stages, frame_ms),
+        keyframes=slam.keyframes(),
+        map_points=slam.map_points(),
+        config=config,
+        seq=name,
+    )
+
+
+def _refined(trajectory: dict | None, frames: list[int], tracked: np.ndarray) -> np.ndarray:
+    """The core's final trajectory (poses after bundle adjustment) in the run's frame order;
+    frames it does not hold keep their tracked pose."""
+    poses = tracked.copy()
+    if trajectory is None:
+        return poses
+    row = {int(f): k for k, f in enumerate(trajectory["frame_index"])}
+    for k, f in enumerate(frames):
+        if f in row and np.isfinite(trajectory["T_w_c"][row[f]]).all():
+            poses[k] = trajectory["T_w_c"][row[f]]
+    return poses

@@ -1,0 +1,201 @@
+"""``Slam``: the frame-by-frame face of the C++ SLAM system (``twistslam._core.slam``).
+
+>>> slam = Slam(Config(), seq.calib)                       # doctest: +SKIP
+>>> for frame in seq:                                      # doctest: +SKIP
+...     out = slam.track(frame)
+...     print(out.index, out.status, out.T_w_c[:3, 3])
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .config import Config
+from .datasets import Calibration, Frame
+
+#: what the core reports per frame
+STATUSES = ("initialized", "ok", "lost", "relocalized")
+
+
+@dataclass
+class TrackedFrame:
+    """The system's output for one frame.
+
+    ``status`` is ``"initialized"`` (map started here), ``"ok"``, ``"lost"`` (too few inliers
+    or no usable image: ``T_w_c`` is a prediction) or ``"relocalized"`` (tracking restarted
+    after a loss). ``timings_ms`` holds the core's stages plus ``"track"``, the wall time of
+    the whole call.
+    """
+
+    index: int
+    status: str
+    T_w_c: np.ndarray  # (4, 4) float64, camera -> world (world = camera at the first frame)
+    is_keyframe: bool = False
+    num_inliers: int = 0
+    num_map_points: int = 0
+    num_keyframes: int = 0
+    timings_ms: dict[str, float] = field(default_factory=dict)
+
+
+def _new_system(camera, options: dict[str, Any]):
+    """Construct the C++ system (imported here: ``import twistslam`` must not need it)."""
+    from twistslam._core import slam as _slam
+
+    return _slam.System(camera, options)
+
+
+def _as_image(image: Any, name: str, index: int) -> np.ndarray:
+    if image is None:
+        raise ValueError(f"frame {index}: no {name} image; stereo SLAM needs both images")
+    image = np.asarray(image)
+    if image.dtype != np.uint8:
+        raise ValueError(f"frame {index}: {name} image must be uint8, got {image.dtype}")
+    if not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
+        raise ValueError(f"frame {index}: {name} image must be (H, W) or (H, W, 3), "
+                         f"got shape {image.shape}")
+    return np.ascontiguousarray(image)
+
+
+class Slam:
+    """Stereo SLAM on a stream of frames.
+
+    Parameters
+    ----------
+    config
+        Settings (``None``: the defaults); copied, later changes to it have no effect.
+    calibration
+        The sequence's :class:`~twistslam.datasets.Calibration` (cameras 2 and 3), or a
+        ``twistslam.geometry.StereoCamera`` with its image size set.
+    image_size
+        ``(width, height)`` in pixels. Default: the camera's, or else the first frame's.
+        Every frame must have this size.
+    """
+
+    def __init__(self, config: Config | None = None, calibration: Calibration | Any = None,
+                 *, image_size: tuple[int, int] | None = None) -> None:
+        if calibration is None:
+            raise ValueError("Slam needs the stereo calibration (a Calibration or StereoCamera)")
+        self.config = Config.from_dict(config.to_dict()) if config is not None else Config()
+        self.calibration = calibration
+        if image_size is None and not isinstance(calibration, Calibration):
+            if getattr(calibration, "width", 0) > 0 and getattr(calibration, "height", 0) > 0:
+                image_size = (int(calibration.width), int(calibration.height))
+        self.image_size = tuple(image_size) if image_size is not None else None
+        self._system = None
+        self._last: list[np.ndarray] = []  # the last two poses, for a fallback prediction
+
+    @property
+    def camera(self):
+        """The ``StereoCamera`` the core uses (``None`` before the image size is known)."""
+        if self.image_size is None:
+            return None
+        if isinstance(self.calibration, Calibration):
+            return self.calibration.stereo_camera(*self.image_size)
+        return self.calibration
+
+    def _system_for(self, width: int, height: int):
+        if self._system is None:
+            if self.image_size is None:
+                self.image_size = (width, height)
+            self._system = _new_system(self.camera, self.config.to_options())
+        return self._system
+
+    def track(self, frame: Frame, labels: np.ndarray | None = None) -> TrackedFrame:
+        """Track one stereo frame.
+
+        Parameters
+        ----------
+        frame
+            Needs ``index``, ``timestamp``, ``image_left`` and ``image_right`` (uint8,
+            ``(H, W)`` grey or ``(H, W, 3)`` RGB, both of the calibrated size).
+        labels
+            Optional ``(H, W)`` panoptic class ids of the left image; pixels of
+            ``config.tracking.dynamic_class_ids`` give no points to camera tracking.
+
+        Raises
+        ------
+        ValueError
+            A missing image, a wrong dtype or shape, a size other than the calibrated one.
+            A blank or textureless frame is not an error: it comes back ``"lost"``.
+        """
+        i = int(frame.index)
+        left = _as_image(frame.image_left, "left", i)
+        right = _as_image(frame.image_right, "right", i)
+        if left.shape != right.shape:
+            raise ValueError(f"frame {i}: left image {left.shape} and right image {right.shape} "
+                             "differ in shape")
+        height, width = left.shape[:2]
+        if self.image_size is not None and (width, height) != tuple(self.image_size):
+            raise ValueError(f"frame {i}: image size {width}x{height} differs from "
+                             f"{self.image_size[0]}x{self.image_size[1]}, the size the system "
+                             "was started with (calibration or first frame)")
+        if labels is not None:
+            labels = np.ascontiguousarray(labels, dtype=np.int32)
+            if labels.shape != (height, width):
+                raise ValueError(f"frame {i}: labels of shape {labels.shape}, expected "
+                                 f"{(height, width)}")
+        system = self._system_for(width, height)
+
+        start = time.perf_counter()
+        out = system.track(i, float(frame.timestamp), left, right, labels)
+        track_ms = (time.perf_counter() - start) * 1e3
+
+        T_w_c = np.asarray(out["T_w_c"], dtype=np.float64).reshape(4, 4)
+        if not np.isfinite(T_w_c).all():
+            # the core predicts lost frames itself; this only guards the output arrays
+            T_w_c = self._predict()
+        self._last = [*self._last[-1:], T_w_c]
+        timings = {str(k): float(v) for k, v in dict(out.get("timings_ms", {})).items()}
+        timings["track"] = track_ms
+        return TrackedFrame(
+            index=i,
+            status=str(out["status"]),
+            T_w_c=T_w_c,
+            is_keyframe=bool(out.get("is_keyframe", False)),
+            num_inliers=int(out.get("num_inliers", 0)),
+            num_map_points=int(out.get("num_map_points", 0)),
+            num_keyframes=int(out.get("num_keyframes", 0)),
+            timings_ms=timings,
+        )
+
+    def _predict(self) -> np.ndarray:
+        """Constant-velocity prediction from the last two poses (identity at the start)."""
+        if not self._last:
+            return np.eye(4)
+        if len(self._last) == 1:
+            return self._last[-1].copy()
+        prev, last = self._last
+        return last @ np.linalg.inv(prev) @ last
+
+    def trajectory(self) -> dict[str, np.ndarray] | None:
+        """``frame_index`` (N,) and ``T_w_c`` (N, 4, 4) of every frame tracked so far,
+        re-expressed through their keyframes so that bundle adjustment reaches them; ``None``
+        when the core keeps no trajectory (then the per-frame ``track`` poses are final)."""
+        if self._system is None or not hasattr(self._system, "trajectory"):
+            return None
+        traj = self._system.trajectory()
+        return {"frame_index": np.asarray(traj["frame_index"], dtype=np.int64),
+                "T_w_c": np.asarray(traj["T_w_c"], dtype=np.float64).reshape(-1, 4, 4)}
+
+    def keyframes(self) -> dict[str, np.ndarray]:
+        """``frame_index`` (K,) and ``T_w_c`` (K, 4, 4) of the keyframes (after local BA)."""
+        if self._system is None:
+            return {"frame_index": np.zeros(0, np.int64), "T_w_c": np.zeros((0, 4, 4))}
+        return {k: np.asarray(v) for k, v in self._system.keyframes().items()}
+
+    def map_points(self) -> dict[str, np.ndarray]:
+        """``X_w`` (M, 3), ``cluster_id`` (M,), ``num_observations`` (M,) of the map."""
+        if self._system is None:
+            return {"X_w": np.zeros((0, 3)), "cluster_id": np.zeros(0, np.int64),
+                    "num_observations": np.zeros(0, np.int64)}
+        return {k: np.asarray(v) for k, v in self._system.map_points().items()}
+
+    def reset(self) -> None:
+        """Forget the map and the trajectory; the next frame initialises a new map."""
+        if self._system is not None:
+            self._system.reset()
+        self._last = []
