@@ -31,7 +31,7 @@ def main() -> None:
     for name, classes in [("unmasked", []), ("masked (movable classes)", MOVABLE_CLASSES)]:
         config = Config().override({"tracking.dynamic_class_ids": classes})
         result = run(seq, config, progress=False)
-        m = evaluate_camera(result.camera_poses, seq.gt_poses[: len(result.camera_poses)])
+        m = evaluate_camera(gt_poses=seq.gt_poses[: len(result.camera_poses)], est_poses=result.camera_poses)
         hz = result.timings.summary()["hz"]
         rows.append((name, m.rpe_t_mean, m.rpe_r_mean, m.ate_rmse, result.num_lost, hz))
     print(f"sequence {args.root} {args.seq}, load {os.getloadavg()[0]:.1f}")
