@@ -2,6 +2,7 @@
 // criteria), new stereo points, culling, and the local bundle adjustment (static half of
 // paper eq. 9).
 #include <algorithm>
+#include <chrono>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -176,7 +177,9 @@ void System::local_bundle_adjustment(int keyframe_id) {
   ba.huber_delta_stereo = o.huber_stereo;
   ba.huber_delta_mono = o.huber_mono;
   ba.num_threads = o.num_threads;
+  const auto start = std::chrono::steady_clock::now();
   const optim::BundleAdjustmentReport report = optim::bundle_adjust(problem, camera_, ba);
+  last_ba_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
   for (const auto& [kf, slot] : kf_slot)
     if (!problem.keyframes[slot].fixed) map_.keyframe(kf).T_c_w = problem.keyframes[slot].T_c_w;

@@ -156,11 +156,16 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
       has_velocity_ = true;
     }
     state_ = State::kTracking;
+    last_ba_ms_ = 0;
     if (!result.is_keyframe && need_keyframe(frame)) {
       insert_keyframe(frame);
       result.is_keyframe = true;
     }
     timer.lap("keyframe");
+    if (last_ba_ms_ > 0) {  // report the BA apart from the rest of the keyframe insertion
+      result.timings_ms.back().second -= last_ba_ms_;
+      result.timings_ms.emplace_back("local_ba", last_ba_ms_);
+    }
   } else if (state_ != State::kEmpty) {
     state_ = State::kLost;  // keep the velocity: the next prediction continues the motion
   }

@@ -92,6 +92,7 @@ class System {
   std::vector<int> recent_points_;
   std::vector<int> local_keyframes_;
   std::vector<TrajectoryEntry> trajectory_;
+  double last_ba_ms_ = 0;  // wall time of the local BA of the last inserted keyframe
 };
 
 }  // namespace twistslam::tracking
