@@ -65,7 +65,9 @@ TEST(OrbExtractor, BucketingCoversTheImageWherePlainOrbClusters) {
 
 TEST(OrbExtractor, CountCloseToTargetAndOctavesSpread) {
   const cv::Mat img = test::to_u8(test::random_texture(1242, 375, 3));
-  const OrbExtractor orb(OrbOptions{});
+  OrbOptions eight_levels;  // ORB-SLAM2's pyramid: the per-level budget is what is checked
+  eight_levels.num_levels = 8;
+  const OrbExtractor orb(eight_levels);
   const Keypoints k = orb.extract(img);
   EXPECT_LE(k.size(), 2000u);
   EXPECT_GE(k.size(), 1900u);
@@ -181,7 +183,9 @@ TEST(OrbExtractor, BlankTinyAndInvalidImages) {
 }
 
 TEST(OrbExtractor, ScaleTables) {
-  const OrbExtractor orb(OrbOptions{});
+  OrbOptions eight_levels;
+  eight_levels.num_levels = 8;
+  const OrbExtractor orb(eight_levels);
   ASSERT_EQ(orb.scale_factors().size(), 8u);
   EXPECT_FLOAT_EQ(orb.scale_factors()[0], 1.0f);
   EXPECT_NEAR(orb.scale_factors()[3], 1.728f, 1e-5);
