@@ -110,13 +110,17 @@ def main() -> int:
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(args.out) if args.out else Path(tmp) / "sim"
+        # other jobs on the machine slow the wall clock (not the CPU time): report the load
+        load_before = os.getloadavg()
         world_s, render_s, cpu_s = _timed_generate(out, args)
         fps = args.frames / render_s
         print(f"scenario {args.scenario}, {args.width}x{args.height}, {args.frames} frames, seed {args.seed}")
         print(f"world build        {world_s:7.2f} s (once per sequence)")
         print(f"render + write     {render_s:7.2f} s = {render_s / args.frames:.3f} s/frame -> {fps:.2f} frames/s")
-        print(f"CPU time           {cpu_s / args.frames:7.3f} CPU-s/frame (all threads; 2 cores give at most 2 per s);"
-              f" load average now {os.getloadavg()[0]:.1f}")
+        print(f"CPU time           {cpu_s / args.frames:7.3f} CPU-s/frame (all threads; {os.cpu_count()} cores give at"
+              f" most {os.cpu_count()} CPU-s per s)")
+        print("load average       before " + " ".join(f"{v:.2f}" for v in load_before)
+              + ", after " + " ".join(f"{v:.2f}" for v in os.getloadavg()) + " (1, 5, 15 min; includes this run)")
         total = world_s + render_s * 100 / args.frames
         print(f"a 100-frame sequence: ~{total:.0f} s")
         if args.previews:

@@ -56,8 +56,11 @@ def _building(front0: np.ndarray, front1: np.ndarray, outward: np.ndarray, depth
     n_wall = 16  # 4 wall quads x 4 vertices come first in box(); the roof quad is last
     attrs = np.stack([perimeter_u, above, np.full(len(v), index), np.zeros(len(v))], -1)
     attrs[n_wall:, 0], attrs[n_wall:, 1], attrs[n_wall:, 3] = v[n_wall:, 0], v[n_wall:, 1], 1.0
-    walls = Mesh(world.vertices[:n_wall], world.faces[:8], attrs[:n_wall])
-    roof = Mesh(world.vertices[n_wall:], world.faces[8:] - n_wall, attrs[n_wall:])
+    # box() lists the first triangle of every quad, then the second ones: quads 0-3 are the
+    # walls, quad 4 the roof (slicing faces[:8] took half the roof and left a hole in a wall,
+    # with vertex indices outside both meshes)
+    walls = Mesh(world.vertices[:n_wall], world.faces[[0, 1, 2, 3, 5, 6, 7, 8]], attrs[:n_wall])
+    roof = Mesh(world.vertices[n_wall:], world.faces[[4, 9]] - n_wall, attrs[n_wall:])
     return walls, roof
 
 

@@ -23,62 +23,82 @@ def car_row(shape: CarShape, colour: np.ndarray, n_body: int) -> list[float]:
 
 
 def car(tex: TextureBank, table: np.ndarray, agent: np.ndarray, prim: np.ndarray, X: np.ndarray,
-        n: np.ndarray, fp: np.ndarray):
+        n: np.ndarray, fp: np.ndarray, colour: bool = True):
+    """Albedo (None unless ``colour``) and reflectivity of car hits at vehicle-frame points ``X``
+    with normals ``n``. Each detail (windows, lights, plates, seams) is a coverage that is
+    exactly zero away from it, so it is evaluated only on the hits near it, in the same order."""
     p = table[agent]
     L, W, H, zb, x_ws, x_rw, x_rr, x_rf, r, ar, af, clear = (p[:, k] for k in range(12))
-    paint = p[:, 12:15].astype(np.float32)
     x, y, z = X[:, 0], X[:, 1], X[:, 2]
     ay, ax = np.abs(n[:, 1]), n[:, 0]
-    g = np.where(ay > 0.6, tex.grain.sample(x * 2, z * 2, fp),
-                 np.where(np.abs(ax) > 0.6, tex.grain.sample(y * 2, z * 2, fp), tex.grain.sample(x * 2, y * 2, fp)))
-    dirt = 0.65 + 0.35 * np.clip((z - clear) / 0.35, 0, 1)
-    colour = paint * (g * dirt)[:, None]
-    reflect = np.full(len(x), 0.35, np.float32)
-    # wheels: black tyre, silver rim with five spokes on the outer face
+    margin = np.maximum(fp, 1e-6)  # a coverage is zero beyond half a footprint off its edge
     wheel = prim >= p[:, 15]
-    xa = np.where(np.abs(x - af) < np.abs(x - ar), af, ar)
-    d = np.hypot(x - xa, z - r)
-    phi = np.arctan2(z - r, x - xa)
-    rim = wheel * (ay > 0.5) * soft(0.62 * r - d, fp)
-    spokes = np.maximum(soft((np.cos(5 * phi) - 0.2) * d * 0.3, fp), soft(0.18 * r - d, fp))
-    colour = np.where(wheel[:, None], 0.035 * g[:, None], colour)
-    colour = _mix(colour, (0.08 + 0.37 * spokes)[:, None] * g[:, None], rim)
-    reflect = np.where(wheel, 0.1, reflect)
-    body = (~wheel).astype(np.float32)
-    # windows
+    body = ~wheel
     b_pillar = 0.5 * (x_rr + x_rf)
-    glass = body * soft(z - zb - 0.04, fp) * soft(H - 0.05 - z, fp)
-    glass *= soft(x - x_rw - 0.05, fp) * soft(x_ws - 0.05 - x, fp)
-    glass *= 1 - (ay > 0.5) * soft(0.06 - np.abs(x - b_pillar), fp)
-    sky_glint = 0.04 + 0.05 * np.clip(n[:, 2], 0, 1)
-    colour = _mix(colour, (sky_glint * g)[:, None] * np.array([0.9, 1.0, 1.1], np.float32), glass)
-    reflect = reflect * (1 - glass) + 0.03 * glass
-    front = body * ((x > L / 2 - 0.15) & (ax > 0.5))
-    rear = body * ((x < -L / 2 + 0.15) & (ax < -0.5))
-    ends = front + rear
-    # lights, plates, grille, bumpers
-    band = rect(z - zb + 0.155, np.abs(y) - 0.74 * W / 2, 0.085, 0.19 * W / 2, fp)
-    colour = _mix(colour, np.array([0.8, 0.78, 0.7], np.float32), front * band)
-    colour = _mix(colour, np.array([0.55, 0.03, 0.02], np.float32), rear * band)
-    plate = ends * rect(y, z - 0.36, 0.26, 0.06, fp)
-    chars = np.clip((tex.letters.sample(y * 0.8 + hash01(agent) * 50, z * 0.8, fp) - 0.5) * 4 + 0.5, 0, 1)
-    colour = _mix(colour, (0.8 - 0.75 * chars)[:, None] * np.ones(3, np.float32), plate)
-    reflect = reflect * (1 - plate) + 0.95 * plate
-    reflect = reflect * (1 - ends * band) + 0.8 * ends * band
-    grille = front * rect(y, z - (clear + zb - 0.01) / 2, 0.45 * W / 2, (zb - clear - 0.51) / 2, fp)
-    slats = stripes(z, 1 / 30, 0.45, fp)
-    colour = _mix(colour, (0.03 + 0.09 * slats)[:, None] * np.ones(3, np.float32), grille)
-    bumper = body * (1 - plate) * soft(clear + 0.2 - z, fp) * ((ay > 0.5) | (np.abs(ax) > 0.5))
-    colour = colour * (1 - 0.65 * bumper)[:, None]
+    # windows
+    gl = np.flatnonzero(body & (z > zb + 0.04 - margin) & (z < H - 0.05 + margin) & (x > x_rw + 0.05 - margin)
+                        & (x < x_ws - 0.05 + margin))
+    xg, zg, fg = x[gl], z[gl], fp[gl]
+    glass = soft(zg - zb[gl] - 0.04, fg) * soft(H[gl] - 0.05 - zg, fg)
+    glass *= soft(xg - x_rw[gl] - 0.05, fg) * soft(x_ws[gl] - 0.05 - xg, fg)
+    glass *= 1 - (ay[gl] > 0.5) * soft(0.06 - np.abs(xg - b_pillar[gl]), fg)
+    # lights, plates, grille, bumpers on the front and rear faces
+    is_front = body & (x > L / 2 - 0.15) & (ax > 0.5)
+    e = np.flatnonzero(is_front | (body & (x < -L / 2 + 0.15) & (ax < -0.5)))
+    front = is_front[e]
+    ye, ze, fe = y[e], z[e], fp[e]
+    band = rect(ze - zb[e] + 0.155, np.abs(ye) - 0.74 * W[e] / 2, 0.085, 0.19 * W[e] / 2, fe)
+    plate = rect(ye, ze - 0.36, 0.26, 0.06, fe)
+    reflect = np.where(wheel, np.float32(0.1), np.float32(0.35))
+    reflect[gl] = reflect[gl] * (1 - glass) + 0.03 * glass
+    reflect[e] = reflect[e] * (1 - plate) + 0.95 * plate
+    reflect[e] = reflect[e] * (1 - band) + 0.8 * band
+    if not colour:
+        return None, reflect
+
+    g = np.empty(len(x), np.float32)  # grain projected along the dominant axis of the normal
+    k = np.flatnonzero(ay > 0.6)
+    g[k] = tex.grain.sample(x[k] * 2, z[k] * 2, fp[k])
+    k = np.flatnonzero((ay <= 0.6) & (np.abs(ax) > 0.6))
+    g[k] = tex.grain.sample(y[k] * 2, z[k] * 2, fp[k])
+    k = np.flatnonzero((ay <= 0.6) & (np.abs(ax) <= 0.6))
+    g[k] = tex.grain.sample(x[k] * 2, y[k] * 2, fp[k])
+    dirt = 0.65 + 0.35 * np.clip((z - clear) / 0.35, 0, 1)
+    out = p[:, 12:15].astype(np.float32) * (g * dirt)[:, None]
+    # wheels: black tyre, silver rim with five spokes on the outer face
+    w = np.flatnonzero(wheel)
+    xw, zw, rw = x[w], z[w], r[w]
+    xa = np.where(np.abs(xw - af[w]) < np.abs(xw - ar[w]), af[w], ar[w])
+    d = np.hypot(xw - xa, zw - rw)
+    phi = np.arctan2(zw - rw, xw - xa)
+    rim = (ay[w] > 0.5) * soft(0.62 * rw - d, fp[w])
+    spokes = np.maximum(soft((np.cos(5 * phi) - 0.2) * d * 0.3, fp[w]), soft(0.18 * rw - d, fp[w]))
+    out[w] = _mix(0.035 * g[w, None], (0.08 + 0.37 * spokes)[:, None] * g[w, None], rim)
+    sky_glint = 0.04 + 0.05 * np.clip(n[gl, 2], 0, 1)
+    out[gl] = _mix(out[gl], (sky_glint * g[gl])[:, None] * np.array([0.9, 1.0, 1.1], np.float32), glass)
+    c = out[e]
+    c = _mix(c, np.array([0.8, 0.78, 0.7], np.float32), front * band)
+    c = _mix(c, np.array([0.55, 0.03, 0.02], np.float32), ~front * band)
+    chars = np.clip((tex.letters.sample(ye * 0.8 + hash01(agent[e]) * 50, ze * 0.8, fe) - 0.5) * 4 + 0.5, 0, 1)
+    c = _mix(c, (0.8 - 0.75 * chars)[:, None] * np.ones(3, np.float32), plate)
+    grille = front * rect(ye, ze - (clear[e] + zb[e] - 0.01) / 2, 0.45 * W[e] / 2, (zb[e] - clear[e] - 0.51) / 2, fe)
+    out[e] = _mix(c, (0.03 + 0.09 * stripes(ze, 1 / 30, 0.45, fe))[:, None] * np.ones(3, np.float32), grille)
+    k = np.flatnonzero(body & (z < clear + 0.2 + margin) & ((ay > 0.5) | (np.abs(ax) > 0.5)))
+    plate_k = np.zeros(len(x), np.float32)
+    plate_k[e] = plate
+    bumper = (1 - plate_k[k]) * soft(clear[k] + 0.2 - z[k], fp[k])
+    out[k] *= (1 - 0.65 * bumper)[:, None]
     # door seams and handles on the sides
-    side = body * (ay > 0.6) * soft(z - clear - 0.08, fp) * soft(zb - z, fp)
-    seam = np.zeros(len(x), np.float32)
-    for xs in (x_ws - 0.03, b_pillar, x_rw + 0.12):
-        seam = np.maximum(seam, coverage(np.abs(x - xs), 0.008, fp))
-    handle = side * soft(0.025 - np.abs(z - zb + 0.1), fp) * np.maximum(
-        soft(0.1 - np.abs(x - b_pillar + 0.3), fp), soft(0.1 - np.abs(x - x_rw - 0.45), fp))
-    colour = colour * (1 - 0.8 * seam * side - 0.6 * handle)[:, None]
-    return colour.astype(np.float32), reflect.astype(np.float32)
+    k = np.flatnonzero(body & (ay > 0.6) & (z > clear + 0.08 - margin) & (z < zb + margin))
+    xk, zk, fk, bp = x[k], z[k], fp[k], b_pillar[k]
+    side = soft(zk - clear[k] - 0.08, fk) * soft(zb[k] - zk, fk)
+    seam = np.zeros(len(k), np.float32)
+    for xs in (x_ws[k] - 0.03, bp, x_rw[k] + 0.12):
+        seam = np.maximum(seam, coverage(np.abs(xk - xs), 0.008, fk))
+    handle = side * soft(0.025 - np.abs(zk - zb[k] + 0.1), fk) * np.maximum(
+        soft(0.1 - np.abs(xk - bp + 0.3), fk), soft(0.1 - np.abs(xk - x_rw[k] - 0.45), fk))
+    out[k] *= (1 - 0.8 * seam * side - 0.6 * handle)[:, None]
+    return out.astype(np.float32), reflect
 
 
 def person(tex: TextureBank, heights: np.ndarray, colours: np.ndarray, agent: np.ndarray, X: np.ndarray,

@@ -10,8 +10,8 @@ from twistslam.geometry import project_boxes
 
 from .camera_render import Camera
 from .config import OracleConfig
-from .mesh import rotate
-from .raycast import GROUP, OBJECT, Hits, ObjectScene, occluded
+from .objects import MovingObjects
+from .raycast import GROUP, OBJECT, Hits, occluded
 from .world import World
 
 #: Cityscapes label ids of the material groups (and of things / sky)
@@ -35,45 +35,97 @@ def panoptic(world: World, hits: Hits, shape: tuple[int, int]) -> np.ndarray:
 
 
 def disparity(world: World, left: Camera, right: Camera, hits: Hits, n: int) -> np.ndarray:
-    """(H, W) float64 disparity u_left - u_right of the surface seen at each pixel (0 = sky)."""
-    X_c = _to_camera(world, hits.point, n)
-    uv_r, _ = right.project(X_c)
-    u = np.tile(np.arange(left.width, dtype=np.float64), left.height)
-    d = np.where(np.isfinite(hits.t), u - uv_r[:, 0], 0.0)
-    return d.reshape(left.height, left.width)
+    """(H, W) float64 disparity u_left - u_right of the surface seen at each pixel (0 = sky).
+
+    The point seen at a pixel is ``left.centre + t d`` in the reference frame (``t`` along the
+    pixel's unit ray ``d``), so its right-image projection is ``a + t (P3 d)`` with ``P3 d``
+    fixed for the sequence: no per-frame change of frame for every pixel."""
+    hit = np.isfinite(hits.t)
+    x = left.projected_directions(right.P) * np.where(hit, hits.t, 0.0)[:, None]
+    x += right.P[:, :3] @ left.centre + right.P[:, 3]
+    with np.errstate(divide="ignore", invalid="ignore"):  # sky pixels: masked below
+        return np.where(hit, left.pixel_centres()[:, 0] - x[:, 0] / x[:, 2], 0.0).reshape(left.height, left.width)
 
 
-def _to_camera(world: World, X_m: np.ndarray, n: int) -> np.ndarray:
-    return rotate(X_m - world.T_m_c[n, :3, 3], world.T_m_c[n, :3, :3].T)
-
-
-def flow(world: World, camera: Camera, hits: Hits, n: int, next_objects: list[ObjectScene]):
+def flow(world: World, camera: Camera, hits: Hits, n: int, next_objects: MovingObjects,
+         next_hits: Hits | None = None):
     """Forward flow (H, W, 2) of the left image from frame n to n+1, ``valid_occ`` (every
     pixel with a surface in front of camera n+1) and ``valid_noc`` (also inside image n+1 and
-    not hidden there)."""
+    not hidden there). ``next_hits``, the pixel-centre hits of frame n+1's left image, spare
+    most of the visibility rays (see :func:`_hidden`)."""
     H, W = camera.height, camera.width
     hit = np.isfinite(hits.t)
-    X = hits.point.copy()
+    X = hits.point
     obj = np.flatnonzero(hits.group == OBJECT)
     if len(obj):
+        X = X.copy()
+        # each object's motion from n to n+1, once per object (not once per pixel)
         a = hits.agent[obj]
-        T_rel = world.traj.T_m_o[a, n + 1] @ np.linalg.inv(world.traj.T_m_o[a, n])
-        X[obj] = np.einsum("nij,nj->ni", T_rel[:, :3, :3], X[obj]) + T_rel[:, :3, 3]
-    uv1, z1 = camera.project(_to_camera(world, X, n + 1))
-    v0, u0 = np.divmod(np.arange(H * W), W)
-    fl = uv1 - np.stack([u0, v0], -1)
+        present = np.bincount(a, minlength=len(world.agents)) > 0
+        agents, which = np.flatnonzero(present), (np.cumsum(present) - 1)[a]
+        T_rel = world.traj.T_m_o[agents, n + 1] @ np.linalg.inv(world.traj.T_m_o[agents, n])
+        X[obj] = np.einsum("nij,nj->ni", T_rel[which, :3, :3], X[obj]) + T_rel[which, :3, 3]
+    uv1, z1 = camera.project_map(X, world.T_m_c[n + 1])
+    fl = uv1 - camera.pixel_centres()
     valid_occ = hit & (z1 > 0.1)
     inside = (uv1[:, 0] > -0.5) & (uv1[:, 0] < W - 0.5) & (uv1[:, 1] > -0.5) & (uv1[:, 1] < H - 0.5)
-    check = np.flatnonzero(valid_occ & inside)
-    T = world.T_m_c[n + 1]
-    origin = T[:3, :3] @ camera.centre + T[:3, 3]
-    ray = X[check] - origin
-    dist = np.linalg.norm(ray, axis=1)
-    hidden = occluded(world.static_scene, next_objects, np.broadcast_to(origin, ray.shape), ray / dist[:, None],
-                      dist * 0.997 - 0.02)
-    valid_noc = np.zeros(H * W, bool)
-    valid_noc[check[~hidden]] = True
+    check = valid_occ & inside
+    hidden = _hidden(world, camera, n + 1, next_objects, next_hits, X, uv1, z1, _surface_id(hits), check)
+    valid_noc = check & ~hidden
     return fl.reshape(H, W, 2), valid_occ.reshape(H, W), valid_noc.reshape(H, W)
+
+
+def _surface_id(hits: Hits) -> np.ndarray:
+    """One integer per hit naming its surface: material group, or the object it belongs to."""
+    return hits.group.astype(np.int32) * 1024 + hits.agent + 1
+
+
+def _hidden(world: World, camera: Camera, m: int, objects: MovingObjects, hits_m: Hits | None,
+            X: np.ndarray, uv: np.ndarray, z: np.ndarray, surface: np.ndarray, check: np.ndarray) -> np.ndarray:
+    """Whether something lies between camera ``m`` and map points ``X`` (projected at ``uv``
+    with depth ``z``, on surface ``surface``) where ``check``, ignoring hits within 0.3 % +
+    2 cm of the point.
+
+    Where the four pixel centres around ``uv`` in frame m's hits ``hits_m`` all see the point's
+    own surface at the point's depth (inverse depth, linear across a plane, interpolated), the
+    point is visible; where all four see something well in front of it, it is hidden. Only the
+    rest (occlusion edges, surface borders) are tested with a ray from camera m to the point:
+    the same answer as rays everywhere, except for occluders thinner than a pixel."""
+    H, W = camera.height, camera.width
+    hidden = np.zeros(len(X), bool)
+    todo = check
+    if hits_m is not None:
+        u, v = uv[:, 0], uv[:, 1]
+        g = np.flatnonzero(check & (u >= 0) & (u <= W - 1) & (v >= 0) & (v <= H - 1))
+        ug, vg = u[g], v[g]
+        x0 = np.minimum(ug.astype(np.int32), W - 2)  # u, v >= 0: truncation is the floor
+        y0 = np.minimum(vg.astype(np.int32), H - 2)
+        fx, fy = (ug - x0).astype(np.float32), (vg - y0).astype(np.float32)
+        corner = y0 * W + x0
+        with np.errstate(divide="ignore"):  # the sky: 1 / inf = 0
+            inv_depth = (1.0 / (hits_m.t * camera.directions()[:, 2])).astype(np.float32)
+        ids, sg = _surface_id(hits_m), surface[g]
+        inv = [inv_depth[corner + k] for k in (0, 1, W, W + 1)]
+        inv_at = (inv[0] * (1 - fx) + inv[1] * fx) * (1 - fy) + (inv[2] * (1 - fx) + inv[3] * fx) * fy
+        same = ids[corner] == sg
+        for k in (1, W, W + 1):
+            same &= ids[corner + k] == sg
+        limit = 0.997 * z[g] - 0.02  # nearer hits hide the point (the ray test's tolerance)
+        visible = same & (inv_at * limit <= 1.0)
+        in_front = np.minimum(np.minimum(inv[0], inv[1]), np.minimum(inv[2], inv[3])) * (0.99 * limit) > 1.0
+        hidden[g[in_front & ~visible]] = True
+        todo = check.copy()
+        todo[g[visible | in_front]] = False
+    todo = np.flatnonzero(todo)
+    if len(todo) == 0:
+        return hidden
+    T = world.T_m_c[m]
+    origin = T[:3, :3] @ camera.centre + T[:3, 3]
+    ray = X[todo] - origin
+    dist = np.linalg.norm(ray, axis=1)
+    hidden[todo] = occluded(world.static_scene, objects, np.broadcast_to(origin, ray.shape), ray / dist[:, None],
+                            dist * 0.997 - 0.02, objects.point_candidates(camera.P, T, uv[todo]))
+    return hidden
 
 
 def encode_flow(fl: np.ndarray, valid: np.ndarray) -> np.ndarray:

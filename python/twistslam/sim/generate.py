@@ -86,8 +86,8 @@ def run(cfg: SimConfig, out: str | Path, overwrite: bool = False, progress: bool
         from tqdm import tqdm
 
         frames = tqdm(frames, desc=f"sim {cfg.scenario} {cfg.seq}", unit="frame")
-    # files are encoded and written by one background thread (zlib and Pillow release the
-    # GIL), overlapping with the rendering of the next frame; each file's bytes are unchanged
+    # files are encoded and written by one background thread (zlib releases the GIL),
+    # overlapping with the rendering of the next frame; each file's bytes are unchanged
     pool = ThreadPoolExecutor(max_workers=1)
     renderer = ThreadPoolExecutor(max_workers=1)
     pending = []
@@ -95,26 +95,34 @@ def run(cfg: SimConfig, out: str | Path, overwrite: bool = False, progress: bool
     def later(fn, *args) -> None:
         pending.append(pool.submit(fn, *args))
 
-    scenes_next = world.object_scene(0)
+    def write_flow(n: int, hits, objects_next, hits_next) -> None:
+        fl, occ, noc = extras.flow(world, left, hits, n, objects_next, hits_next)
+        later(writer.png16, "flow_occ", n, extras.encode_flow(fl, occ))
+        later(writer.png16, "flow_noc", n, extras.encode_flow(fl, noc))
+
+    flow_wait = None  # (frame, its hits, frame + 1's moving objects) of the flow still to write
+    objects_next = world.moving_objects(0)
     for n in frames:
-        scenes, scenes_next = scenes_next, world.object_scene(n + 1)
+        objects, objects_next = objects_next, world.moving_objects(n + 1)
         # the right image and the LiDAR scan render in a second thread while this one does
         # the left image and its ground truth (numpy and Open3D release the GIL)
-        right_job = renderer.submit(render, world, right, scenes, n, _rng(cfg, "right", n))
+        right_job = renderer.submit(render, world, right, objects, n, _rng(cfg, "right", n))
         if lidar is not None:
-            lidar_job = renderer.submit(lidar.scan, world, scenes, n, _rng(cfg, "lidar", n))
-        image, hits = render(world, left, scenes, n, _rng(cfg, "left", n))
+            lidar_job = renderer.submit(lidar.scan, world, objects, n, _rng(cfg, "lidar", n))
+        image, hits = render(world, left, objects, n, _rng(cfg, "left", n))
         later(writer.image, "image_02", n, image)
-        labels = frame_labels(world, left, scenes, hits, n)
+        labels = frame_labels(world, left, hits, n)
         tables.append(labels)
         if cfg.output.panoptic:
             later(writer.png16, "panoptic", n, extras.panoptic(world, hits, shape))
         if cfg.output.disparity:
             later(writer.png16, "disparity", n, extras.encode_disparity(extras.disparity(world, left, right, hits, n)))
         if cfg.output.flow:
-            fl, occ, noc = extras.flow(world, left, hits, n, scenes_next)
-            later(writer.png16, "flow_occ", n, extras.encode_flow(fl, occ))
-            later(writer.png16, "flow_noc", n, extras.encode_flow(fl, noc))
+            # frame n-1's flow is finished now: its visibility in frame n is read from this
+            # frame's hits (depth and surfaces), with rays only where that is ambiguous
+            if flow_wait is not None:
+                write_flow(*flow_wait, hits)
+            flow_wait = (n, hits, objects_next)
         later(writer.image, "image_03", n, right_job.result()[0])
         counts = np.zeros(len(world.agents), dtype=np.int64)
         if lidar is not None:
@@ -125,6 +133,8 @@ def run(cfg: SimConfig, out: str | Path, overwrite: bool = False, progress: bool
             detections += extras.oracle_detections(world, labels, counts, left, cfg.oracle, _rng(cfg, "oracle", n), n)
         object_poses += _object_pose_lines(world, n)
         pending = [f for f in pending if not f.done() or f.result() is not None]  # raise early
+    if flow_wait is not None:
+        write_flow(*flow_wait, None)  # the last frame's visibility: rays only
     for f in pending:
         f.result()
     pool.shutdown()

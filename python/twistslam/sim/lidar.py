@@ -11,7 +11,8 @@ import numpy as np
 
 from .config import LidarConfig
 from .mesh import rotate
-from .raycast import GROUP, OBJECT, ObjectScene, cast
+from .objects import MovingObjects
+from .raycast import GROUP, OBJECT, cast
 from .shading import surface
 from .world import World
 
@@ -40,18 +41,23 @@ class Lidar:
         ])
         azimuth = np.radians(np.arange(0.0, 360.0, cfg.azimuth_step))
         el, az = np.meshgrid(np.radians(elevation), azimuth, indexing="ij")
+        # the ray grid, for finding the rays that may hit an object (row-major (beam, azimuth))
+        self.elevation, self.azimuth_step = np.radians(elevation), np.radians(cfg.azimuth_step)
+        self.n_azimuth = len(azimuth)
         self.dirs = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], -1).reshape(-1, 3)
+        self.dirs32 = self.dirs.astype(np.float32)
 
-    def scan(self, world: World, objects: list[ObjectScene], n: int, rng: np.random.Generator) -> Scan:
+    def scan(self, world: World, objects: MovingObjects, n: int, rng: np.random.Generator) -> Scan:
         cfg = self.cfg
         T = world.T_m_c[n] @ world.T_c_velo
-        dirs = rotate(self.dirs, T[:3, :3])
+        dirs = rotate(self.dirs32, T[:3, :3].astype(np.float32))  # the ray caster takes float32
         origins = np.broadcast_to(T[:3, 3], dirs.shape)
-        hits = cast(world.static_scene, objects, origins, dirs)
+        candidates = objects.grid_candidates(T, self.elevation, self.azimuth_step, self.n_azimuth)
+        hits = cast(world.static_scene, objects, origins, dirs, candidates)
         keep = np.isfinite(hits.t) & (hits.t > cfg.min_range) & (hits.t < cfg.max_range)
         idx = np.flatnonzero(keep)
         sub = hits.select(keep)
-        _, reflect = surface(world, sub, n, sub.t * BEAM_DIVERGENCE)
+        _, reflect = surface(world, sub, n, sub.t * BEAM_DIVERGENCE, colour=False)  # no textures needed
         u = rng.uniform(size=(2, len(idx)))
         alive = (u[0] >= cfg.dropout) & ~((reflect < 0.06) & (u[1] < cfg.glass_dropout))
         # Gaussian range noise truncated at 2 sigma: the HDL-64E's "< 2 cm (1 sigma)" accuracy

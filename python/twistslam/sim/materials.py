@@ -53,10 +53,8 @@ def _mix(a: np.ndarray, b, w: np.ndarray) -> np.ndarray:
     return a * (1 - w[:, None]) + b * w[:, None]
 
 
-def road(tex: TextureBank, net: StreetNetwork, attrs: np.ndarray, fp: np.ndarray):
+def road(tex: TextureBank, net: StreetNetwork, attrs: np.ndarray, fp: np.ndarray, colour: bool = True):
     s, lat, sid = attrs[:, 0].astype(np.float64), attrs[:, 1].astype(np.float64), np.rint(attrs[:, 2])
-    grain = tex.asphalt.sample(s, lat, fp) * tex.stain.sample(s, lat, fp)
-    colour = (0.085 * grain)[:, None] * np.array([1.0, 1.0, 1.05], dtype=np.float32)
     paint = np.zeros(len(s), dtype=np.float32)
     for st in net.streets:
         m = sid == st.index
@@ -81,9 +79,15 @@ def road(tex: TextureBank, net: StreetNetwork, attrs: np.ndarray, fp: np.ndarray
             zebra = soft(1.5 - np.abs(d - st.cross_half - 2.5), f) * soft(edge - aa, f)
             p = p * (1 - zebra) + stripes(lat[m], 1.0, 0.5, f) * zebra
         paint[m] = p
-    wear = np.clip(tex.stain.sample(s * 3.1, lat * 3.1, fp), 0.7, 1.1)
-    white = (0.62 * wear)[:, None] * np.ones(3, dtype=np.float32)
-    return _mix(colour, white, 0.95 * paint).astype(np.float32), (0.15 + 0.55 * paint).astype(np.float32)
+    reflect = (0.15 + 0.55 * paint).astype(np.float32)
+    if not colour:
+        return None, reflect
+    grain = tex.asphalt.sample(s, lat, fp) * tex.stain.sample(s, lat, fp)
+    out = (0.085 * grain)[:, None] * np.array([1.0, 1.0, 1.05], dtype=np.float32)
+    k = np.flatnonzero(paint > 0)  # worn white paint, only where there are lines
+    wear = np.clip(tex.stain.sample(s[k] * 3.1, lat[k] * 3.1, fp[k]), 0.7, 1.1)
+    out[k] = _mix(out[k], (0.62 * wear)[:, None] * np.ones(3, dtype=np.float32), 0.95 * paint[k])
+    return out.astype(np.float32), reflect
 
 
 def sidewalk(tex: TextureBank, attrs: np.ndarray, fp: np.ndarray, curb: float):
@@ -102,53 +106,8 @@ def terrain(tex: TextureBank, P: np.ndarray, fp: np.ndarray):
     return colour.astype(np.float32), np.full(len(g), 0.35, np.float32)
 
 
-WALL_PALETTE = np.array([[0.55, 0.5, 0.4], [0.38, 0.38, 0.37], [0.6, 0.5, 0.3], [0.4, 0.45, 0.5],
-                         [0.55, 0.4, 0.36], [0.65, 0.64, 0.6], [0.5, 0.33, 0.22], [0.3, 0.3, 0.34]], np.float32)
 SIGN_PALETTE = np.array([[0.6, 0.05, 0.04], [0.05, 0.15, 0.5], [0.7, 0.55, 0.05], [0.05, 0.35, 0.12],
                          [0.65, 0.65, 0.65], [0.45, 0.05, 0.35]], np.float32)
-
-
-def wall(tex: TextureBank, params: np.ndarray, attrs: np.ndarray, fp: np.ndarray):
-    u, v, b = attrs[:, 0].astype(np.float64), attrs[:, 1].astype(np.float64), np.rint(attrs[:, 2]).astype(np.int64)
-    fh, pitch, ww, wh, hue, brick, shop, seed = (params[b, k] for k in range(8))
-    is_brick = brick > 0.5
-    detail = np.where(is_brick, tex.brick.sample(u, v, fp), tex.plaster.sample(u, v, fp))
-    base = WALL_PALETTE[(hue * len(WALL_PALETTE)).astype(int) % len(WALL_PALETTE)]
-    base = np.where(is_brick[:, None], np.array([0.36, 0.15, 0.09], np.float32) * (0.8 + 0.4 * hue[:, None]), base)
-    colour = base * detail[:, None]
-    floor = np.floor(v / fh)
-    fv = v - floor * fh
-    col = np.floor(u / pitch)
-    fu = u - (col + 0.5) * pitch
-    rnd = hash01(seed, floor, col)
-    upper = (floor >= 1).astype(np.float32)
-    # upper floors: windows with frame, sill and a cross bar, glass of varying darkness
-    centre_v = fv - 0.9 - wh / 2
-    win = upper * rect(fu, centre_v, ww / 2, wh / 2, fp)
-    pane = win * rect(fu, centre_v, ww / 2 - 0.07, wh / 2 - 0.07, fp)
-    pane *= soft(np.abs(fu) - 0.025, fp) * soft(np.abs(fv - 0.9 - 0.65 * wh) - 0.03, fp)
-    sill = upper * rect(fu, fv - 0.85, ww / 2 + 0.08, 0.05, fp)
-    glass = (0.03 + 0.14 * rnd ** 2)[:, None] * np.array([0.9, 1.0, 1.1], np.float32)
-    curtain = (rnd > 0.7) * soft(fv - 0.9 - wh * (0.3 + 0.5 * rnd), fp)
-    glass = _mix(glass, np.array([0.45, 0.42, 0.36], np.float32) * rnd[:, None], curtain)
-    colour = _mix(colour, np.array([0.6, 0.6, 0.57], np.float32), win)
-    colour = _mix(colour, glass, pane)
-    colour = _mix(colour, np.array([0.5, 0.5, 0.48], np.float32), sill)
-    # ground floor: shop window and a sign band with letters, or a door
-    ground = 1 - upper
-    is_shop = ground * (shop > 0.5)
-    shop_win = is_shop * rect(fu, v - (fh - 0.6) / 2, pitch / 2 - 0.25, (fh - 1.3) / 2, fp)
-    band = is_shop * soft(0.3 - np.abs(v - fh + 0.5), fp)
-    sign_col = SIGN_PALETTE[(hash01(seed, col // 3) * len(SIGN_PALETTE)).astype(int)]
-    letters = np.clip((tex.letters.sample(u * 1.3, v * 1.3, fp) - 0.5) * 4 + 0.5, 0, 1)
-    goods = tex.leaves.sample(u, v * 0.5, fp)[:, None] * rnd[:, None]  # things behind the glass
-    display = (0.05 + 0.2 * goods) * np.array([1.0, 0.95, 0.9], np.float32)
-    colour = _mix(colour, display, shop_win)
-    colour = _mix(colour, _mix(sign_col, np.float32(0.8), letters), band)
-    door = ground * (shop <= 0.5) * (col % 3 == 1) * rect(fu, v - 1.1, 0.55, 1.1, fp)
-    colour = _mix(colour, np.array([0.12, 0.07, 0.04], np.float32) * detail[:, None], door)
-    glassy = np.maximum(pane, shop_win)
-    return colour.astype(np.float32), (0.3 - 0.25 * glassy).astype(np.float32)
 
 
 def roof(tex: TextureBank, attrs: np.ndarray, fp: np.ndarray):

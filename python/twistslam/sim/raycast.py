@@ -1,18 +1,22 @@
 """Ray casting with Open3D's CPU ``RaycastingScene`` (Embree).
 
-The static scene (ground, road, facades, furniture) is built once per sequence; objects go
-into a second, small scene rebuilt per frame (a RaycastingScene cannot move geometry).
-Each ray is cast into both and the nearer hit wins.
+The static scene (ground, road, facades, furniture, parked cars) is built once per
+sequence; the moving objects are cast into separately, each in its own frame (see
+:mod:`twistslam.sim.objects`), and the nearer hit wins.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import open3d as o3d
 
 from .mesh import Mesh
+
+if TYPE_CHECKING:
+    from .objects import MovingObjects
 
 #: static material groups, in geometry-id order of the static scene
 STATIC_GROUPS = ("terrain", "road", "sidewalk", "wall", "roof", "trunk", "canopy", "pole", "sign", "rail")
@@ -21,8 +25,12 @@ OBJECT = 100  # group code of a hit on an object (car or pedestrian)
 MISS = -1
 
 
-def _tensor_rays(origins: np.ndarray, dirs: np.ndarray) -> o3d.core.Tensor:
-    return o3d.core.Tensor(np.concatenate([origins, dirs], axis=1).astype(np.float32))
+def tensor_rays(origins: np.ndarray, dirs: np.ndarray) -> o3d.core.Tensor:
+    """Open3D's (N, 6) float32 rays, converted while copying (no float64 intermediate)."""
+    rays = np.empty((len(dirs), 6), np.float32)
+    rays[:, :3] = origins
+    rays[:, 3:] = dirs
+    return o3d.core.Tensor(rays)
 
 
 class StaticScene:
@@ -32,6 +40,7 @@ class StaticScene:
     def __init__(self, groups: dict[str, Mesh], objects: list[tuple[int, Mesh]] = ()) -> None:
         self.scene = o3d.t.geometry.RaycastingScene()
         self.mesh_of_group: dict[int, Mesh] = {}
+        self.face_attrs: dict[int, np.ndarray] = {}
         group_of_geometry: list[int] = []
         agent_of_geometry: list[int] = []
         for name in STATIC_GROUPS:
@@ -40,6 +49,8 @@ class StaticScene:
                 continue
             self.scene.add_triangles(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))
             self.mesh_of_group[GROUP[name]] = mesh
+            if mesh.attrs.shape[1]:
+                self.face_attrs[GROUP[name]] = mesh.attrs[mesh.faces]  # see interpolate
             group_of_geometry.append(GROUP[name])
             agent_of_geometry.append(-1)
         for agent, mesh in objects:
@@ -48,18 +59,20 @@ class StaticScene:
             agent_of_geometry.append(agent)
         self.group_of_geometry = np.array(group_of_geometry, dtype=np.int16)
         self.agent_of_geometry = np.array(agent_of_geometry, dtype=np.int32)
-        # the same objects alone, for amodal masks (listing every wall a ray crosses is slow)
-        self.objects = ObjectScene([a for a, _ in objects], [m for _, m in objects])
+        # the same with a trailing entry for misses (see cast)
+        self.group_table = np.append(self.group_of_geometry, np.int16(MISS))
+        self.agent_table = np.append(self.agent_of_geometry, np.int32(-1))
+        # build the BVH now, in one thread (Open3D builds it on the first query otherwise)
+        self.scene.test_occlusions(o3d.core.Tensor(np.zeros((1, 6), np.float32)))
 
 
-class ObjectScene:
-    """Objects of one frame: one geometry per agent, meshes already in the map frame."""
-
-    def __init__(self, agents: list[int], meshes: list[Mesh]) -> None:
-        self.agents = np.array(agents, dtype=np.int32)
-        self.scene = o3d.t.geometry.RaycastingScene() if agents else None
-        for mesh in meshes:
-            self.scene.add_triangles(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))
+def mesh_scene(vertices: np.ndarray, faces: np.ndarray) -> o3d.t.geometry.RaycastingScene:
+    """A ray-casting scene of one triangle mesh, committed (its BVH built) at once: Open3D
+    builds it on the first query, and two threads must not do that at the same time."""
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(vertices.astype(np.float32), faces.astype(np.uint32))
+    scene.test_occlusions(o3d.core.Tensor(np.zeros((1, 6), np.float32)))
+    return scene
 
 
 @dataclass
@@ -69,85 +82,65 @@ class Hits:
     t: np.ndarray  # (N,) float64 distance along the unit direction; inf where nothing is hit
     group: np.ndarray  # (N,) int16: STATIC_GROUPS index, OBJECT, or MISS
     agent: np.ndarray  # (N,) int32 agent index for OBJECT hits, else -1
-    prim: np.ndarray  # (N,) int64 triangle index within its geometry
+    prim: np.ndarray  # (N,) uint32 triangle index within its geometry
     uv: np.ndarray  # (N, 2) float32 barycentric coordinates of vertices 1 and 2
-    normal: np.ndarray  # (N, 3) float64 unit normal facing the ray origin
+    normal: np.ndarray  # (N, 3) float32 unit normal facing the ray origin
     point: np.ndarray  # (N, 3) float64 hit point
 
     def select(self, mask: np.ndarray) -> "Hits":
-        idx = np.flatnonzero(mask)
+        """The hits of a boolean ``mask`` or of an index array."""
+        idx = np.flatnonzero(mask) if mask.dtype == bool else mask
         return Hits(*(getattr(self, k)[idx] for k in self.__dataclass_fields__))
 
 
-def cast(static: StaticScene, objects: "ObjectScene | list[ObjectScene]", origins: np.ndarray,
-         dirs: np.ndarray) -> Hits:
+def cast(static: StaticScene, objects: "MovingObjects | None", origins: np.ndarray, dirs: np.ndarray,
+         candidates: list[np.ndarray] | None = None) -> Hits:
     """First hits of rays with unit directions ``dirs`` (N, 3) from ``origins`` (N, 3) in the
-    static scene and the object scene(s)."""
-    rays = _tensor_rays(origins, dirs)
+    static scene and among the moving ``objects``, ``candidates[k]`` being the rays that may
+    hit object k (default: all rays)."""
+    rays = tensor_rays(origins, dirs)
     a = static.scene.cast_rays(rays)
     t = a["t_hit"].numpy().astype(np.float64)
-    geom = a["geometry_ids"].numpy()
-    prim = a["primitive_ids"].numpy().astype(np.int64)
+    # misses carry Open3D's INVALID_ID: clamp it onto the tables' trailing MISS entry, so the
+    # lookups are single gathers instead of masked assignments over every ray
+    geom = np.minimum(a["geometry_ids"].numpy(), len(static.group_of_geometry))
+    group = static.group_table[geom]
+    agent = static.agent_table[geom]
+    prim = a["primitive_ids"].numpy()
     uv = a["primitive_uvs"].numpy()
-    normal = a["primitive_normals"].numpy().astype(np.float64)
-    hit = np.isfinite(t)
-    group = np.full(len(t), MISS, dtype=np.int16)
-    group[hit] = static.group_of_geometry[geom[hit]]
-    agent = np.full(len(t), -1, dtype=np.int32)
-    agent[hit] = static.agent_of_geometry[geom[hit]]
-    for obj in objects if isinstance(objects, list) else [objects]:
-        if obj.scene is None:
-            continue
-        b = obj.scene.cast_rays(rays)
-        tb = b["t_hit"].numpy().astype(np.float64)
-        closer = tb < t
-        t[closer] = tb[closer]
-        group[closer] = OBJECT
-        agent[closer] = obj.agents[b["geometry_ids"].numpy()[closer]]
-        prim[closer] = b["primitive_ids"].numpy()[closer]
-        uv[closer] = b["primitive_uvs"].numpy()[closer]
-        normal[closer] = b["primitive_normals"].numpy()[closer]
-    flip = np.einsum("ij,ij->i", normal, dirs) > 0
-    normal[flip] *= -1
-    point = origins + np.where(np.isfinite(t), t, 0.0)[:, None] * dirs
+    normal = a["primitive_normals"].numpy()  # float32: shading does not need more
+    if objects is not None and len(objects):
+        if candidates is None:
+            candidates = [np.arange(len(dirs))] * len(objects)
+        objects.first_hits(origins, dirs, candidates, t, group, agent, prim, uv, normal, OBJECT)
+    # face the normals towards the ray origin (a multiply by +-1: masked writes cost twice as much)
+    normal *= np.where(np.einsum("ij,ij->i", normal, dirs) > 0, np.float32(-1), np.float32(1))[:, None]
+    # hit points in float64 (ground truth is projected from them); misses at the origin
+    point = np.multiply(dirs, np.where(np.isfinite(t), t, 0.0)[:, None], dtype=np.float64)
+    point += origins
     return Hits(t, group, agent, prim, uv, normal, point)
 
 
-def occluded(static: StaticScene, objects: ObjectScene, origins: np.ndarray, dirs: np.ndarray,
-             tfar: float | np.ndarray = np.inf) -> np.ndarray:
-    """Whether anything lies on each ray between 0 and ``tfar`` (per ray or common)."""
+def occluded(static: StaticScene, objects: "MovingObjects | None", origins: np.ndarray, dirs: np.ndarray,
+             tfar: float | np.ndarray = np.inf, candidates: list[np.ndarray] | None = None) -> np.ndarray:
+    """Whether anything lies on each ray between 0 and ``tfar`` (per ray or common);
+    ``candidates`` as for :func:`cast`."""
     if np.ndim(tfar) == 0:
-        rays = _tensor_rays(origins, dirs)
-        out = static.scene.test_occlusions(rays, tfar=float(tfar)).numpy()
-        for obj in objects if isinstance(objects, list) else [objects]:
-            if obj.scene is not None:
-                out |= obj.scene.test_occlusions(rays, tfar=float(tfar)).numpy()
-        return out
-    # per-ray limits: scale the directions so that t = 1 is the limit
-    scaled = dirs * np.asarray(tfar)[:, None]
-    return occluded(static, objects, origins, scaled, 1.0)
+        out = static.scene.test_occlusions(tensor_rays(origins, dirs), tfar=float(tfar)).numpy()
+    else:  # per-ray limits: scale the directions so that t = 1 is the limit
+        out = static.scene.test_occlusions(tensor_rays(origins, dirs * np.asarray(tfar)[:, None]), tfar=1.0).numpy()
+    if objects is not None and len(objects):
+        if candidates is None:
+            candidates = [np.arange(len(dirs))] * len(objects)
+        out |= objects.occluded(origins, dirs, tfar, candidates)
+    return out
 
 
-def interpolate(mesh: Mesh, prim: np.ndarray, uv: np.ndarray) -> np.ndarray:
-    """Per-vertex attributes of ``mesh`` at hits (triangle ``prim``, barycentric ``uv``)."""
-    f = mesh.faces[prim]
-    w1, w2 = uv[:, 0:1], uv[:, 1:2]
-    a = mesh.attrs
-    return a[f[:, 0]] * (1 - w1 - w2) + a[f[:, 1]] * w1 + a[f[:, 2]] * w2
-
-
-def all_objects_on_rays(static: StaticScene, objects: list[ObjectScene], origins: np.ndarray, dirs: np.ndarray
-                        ) -> tuple[np.ndarray, np.ndarray]:
-    """Every (ray index, agent) pair whose ray passes through the agent's mesh (amodal masks)."""
-    keys = [np.zeros(0, dtype=np.int64)]
-    if len(origins) == 0:
-        return keys[0], np.zeros(0, dtype=np.int32)
-    rays = _tensor_rays(origins, dirs)
-    for obj in [static.objects, *objects]:
-        if obj.scene is None:
-            continue
-        r = obj.scene.list_intersections(rays)
-        ray_ids = r["ray_ids"].numpy().astype(np.int64)
-        keys.append(ray_ids * 100000 + obj.agents[r["geometry_ids"].numpy()])
-    key = np.unique(np.concatenate(keys))
-    return key // 100000, (key % 100000).astype(np.int32)
+def interpolate(face_attrs: np.ndarray, prim: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """Per-vertex attributes at hits (triangle ``prim``, barycentric ``uv``), from the
+    attributes of each face's three vertices ``face_attrs`` (F, 3, K): one gather per hit
+    instead of a gather of the face and then of each vertex."""
+    w = np.empty((len(uv), 3), np.float32)  # barycentric weights of the three vertices
+    w[:, 1:] = uv
+    w[:, 0] = 1 - uv[:, 0] - uv[:, 1]
+    return np.einsum("nkj,nk->nj", face_attrs[prim], w)

@@ -25,44 +25,51 @@ def fractal_noise(rng: np.random.Generator, size: int, beta: float) -> np.ndarra
 
 
 class MipTexture:
-    """A tileable grey image of ``texel`` metres per pixel with its mip pyramid."""
+    """A tileable square grey image (power-of-two side) of ``texel`` metres per pixel, with its
+    mip pyramid stored in one flat array so that a batch of samples at mixed levels is one
+    vectorised gather (a loop over levels with masks cost several passes over the batch)."""
 
     def __init__(self, image: np.ndarray, texel: float) -> None:
         self.texel = texel
         self.levels = [np.ascontiguousarray(image, dtype=np.float32)]
+        side = self.levels[0].shape[0]
+        if self.levels[0].shape != (side, side) or side & (side - 1):
+            raise ValueError(f"MipTexture: expected a square power-of-two image, got {image.shape}")
         while min(self.levels[-1].shape) > 2:
             a = self.levels[-1]
             self.levels.append(0.25 * (a[0::2, 0::2] + a[1::2, 0::2] + a[0::2, 1::2] + a[1::2, 1::2]))
+        self._flat = np.concatenate([a.ravel() for a in self.levels])
+        # int32 index arithmetic: half the memory traffic of int64, and the pyramid is small
+        self._offset = np.cumsum([0] + [a.size for a in self.levels[:-1]]).astype(np.int32)
+        self._side = np.array([a.shape[0] for a in self.levels], dtype=np.int32)
+        # texel size of each level, computed as texel * 2**level like a per-level division would
+        self._scale = np.array([texel * 2.0**k for k in range(len(self.levels))])
 
     def sample(self, u: np.ndarray, v: np.ndarray, footprint: np.ndarray) -> np.ndarray:
         """Values at surface coordinates ``u, v`` (m) for pixel footprints (m), bilinear
-        within the mip level whose texel size is nearest to the footprint (in log scale)."""
-        lod = np.clip(np.floor(np.log2(np.maximum(footprint, 1e-9) / self.texel) + 0.5), 0,
-                      len(self.levels) - 1).astype(np.int8)
-        out = np.empty(len(u), dtype=np.float32)
-        for level in np.unique(lod):
-            m = lod == level
-            out[m] = _bilinear(self.levels[level], u[m] / (self.texel * 2.0**level),
-                               v[m] / (self.texel * 2.0**level))
-        return out
-
-
-def _bilinear(img: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    H, W = img.shape
-    x = x - 0.5
-    y = y - 0.5
-    x0 = np.floor(x)
-    y0 = np.floor(y)
-    fx = (x - x0).astype(np.float32)
-    fy = (y - y0).astype(np.float32)
-    ix0 = x0.astype(np.int64) % W
-    iy0 = y0.astype(np.int64) % H
-    ix1 = (ix0 + 1) % W
-    iy1 = (iy0 + 1) % H
-    flat = img.ravel()
-    top = flat[iy0 * W + ix0] * (1 - fx) + flat[iy0 * W + ix1] * fx
-    bottom = flat[iy1 * W + ix0] * (1 - fx) + flat[iy1 * W + ix1] * fx
-    return top * (1 - fy) + bottom * fy
+        within the mip level whose texel size is nearest to the footprint (in log scale).
+        Coordinates must stay within +-2**31 texels (street coordinates are ~1e5)."""
+        lod = np.log2(np.maximum(footprint, 1e-9) / self.texel).astype(np.float32)
+        lod = np.clip(np.floor(lod + np.float32(0.5)), 0, len(self.levels) - 1).astype(np.intp)
+        scale = self._scale[lod]
+        x = u / scale - 0.5  # float64: coordinates reach 1e5 texels
+        y = v / scale - 0.5
+        x0 = np.floor(x)
+        y0 = np.floor(y)
+        fx = (x - x0).astype(np.float32)
+        fy = (y - y0).astype(np.float32)
+        side = self._side[lod]
+        wrap = side - 1  # sides are powers of two: & wraps like a floor modulo, negatives too
+        ix0 = x0.astype(np.int32) & wrap
+        ix1 = (ix0 + 1) & wrap
+        iy0 = y0.astype(np.int32) & wrap
+        offset = self._offset[lod]
+        row0 = offset + iy0 * side
+        row1 = offset + ((iy0 + 1) & wrap) * side
+        flat = self._flat
+        top = flat[row0 + ix0] * (1 - fx) + flat[row0 + ix1] * fx
+        bottom = flat[row1 + ix0] * (1 - fx) + flat[row1 + ix1] * fx
+        return top * (1 - fy) + bottom * fy
 
 
 def _cells(rng: np.random.Generator, size: int, cell_w: int, cell_h: int, mortar: int, stagger: bool,

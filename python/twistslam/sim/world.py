@@ -19,7 +19,8 @@ from .config import DEFAULT_CALIB, SimConfig
 from .mesh import Mesh
 from .motion import simulate
 from .person_mesh import person_mesh
-from .raycast import ObjectScene, StaticScene
+from .objects import MovingObjects
+from .raycast import StaticScene, mesh_scene
 from .road import StreetNetwork
 from .terrain import Terrain
 from .textures import TextureBank
@@ -115,8 +116,13 @@ class World:
         self._build_object_meshes()
         # objects that never move (parked cars) join the static scene, built once
         parked = [i for i in np.flatnonzero(self.near.any(axis=1) & ~self.moving) if self.meshes[i] is not None]
-        placed = [(i, self.meshes[i].transformed(self.traj.T_m_o[i, 0])) for i in parked]
+        placed = [(i, self.meshes[i].transformed(self.object_pose(i, 0))) for i in parked]
         self.static_scene = StaticScene(groups, placed)
+        # every tracked object's mesh in a ray-casting scene of its own, in its object frame
+        # (built once: rays are moved into the object frame instead of the mesh; the moving
+        # objects of a frame and the amodal masks of labels are cast this way)
+        self.object_scenes = {int(a): mesh_scene(self.meshes[a].vertices, self.meshes[a].faces)
+                              for a in np.flatnonzero(self.track_id >= 0) if self.meshes[a] is not None}
 
     def _build_object_meshes(self) -> None:
         """Object-frame meshes, the car material table and per-agent class / track ids."""
@@ -135,6 +141,11 @@ class World:
                 self.car_table[i] = car_row(a.shape, a.colour, n_body)
             elif a.kind == "person":
                 self.meshes[i] = person_mesh(a.shape)
+        # object-frame boxes (min, max corner) of the meshes: which rays may hit an object
+        self.mesh_bounds = np.zeros((n_agents, 2, 3))
+        for i, mesh in enumerate(self.meshes):
+            if mesh is not None:
+                self.mesh_bounds[i] = mesh.vertices.min(0), mesh.vertices.max(0)
         # track ids: objects that are ever near the ego camera, numbered in agent order
         self.track_id = np.full(n_agents, -1)
         cam = self.T_m_c[:, :3, 3]
@@ -145,11 +156,18 @@ class World:
         ids = np.flatnonzero(near.any(axis=1))
         self.track_id[ids] = np.arange(len(ids))
 
-    def object_scene(self, n: int) -> list[ObjectScene]:
-        """Ray-casting scene(s) of the moving objects near the ego car at state ``n`` (parked
-        cars are part of the static scene)."""
-        idx = [i for i in np.flatnonzero(self.near[:, n] & self.moving) if self.meshes[i] is not None]
-        return [ObjectScene(idx, [self.meshes[i].transformed(self.traj.T_m_o[i, n]) for i in idx])]
+    def moving_objects(self, n: int) -> MovingObjects:
+        """The moving objects near the ego car at state ``n``, for ray casting (parked cars
+        are part of the static scene)."""
+        idx = np.array([i for i in np.flatnonzero(self.near[:, n] & self.moving) if self.meshes[i] is not None],
+                       dtype=np.int64)
+        return MovingObjects(idx, self.traj.T_m_o[idx, n], [self.object_scenes[a] for a in idx],
+                             self.mesh_bounds[idx])
+
+    def object_pose(self, a: int, n: int) -> np.ndarray:
+        """``T_m_o`` of agent ``a`` as placed in the ray-casting scenes at state ``n`` (parked
+        cars stay where the static scene holds them)."""
+        return self.traj.T_m_o[a, n if self.moving[a] else 0]
 
     @property
     def T_c_velo(self) -> np.ndarray:

@@ -14,13 +14,12 @@ from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
 
 from twistslam.datasets import write_calibration, write_labels, write_oxts, write_poses, write_velodyne
 from twistslam.datasets.objects import ObjectTable
 
 from .mesh import write_ply
-from .png16 import write_png16
+from .png16 import write_png, write_png16
 
 FRAME_FOLDERS = {"image_02": ".png", "image_03": ".png", "velodyne": ".bin", "velodyne_labels": ".label",
                  "panoptic": ".png", "flow_occ": ".png", "flow_noc": ".png", "disparity": ".png"}
@@ -61,7 +60,7 @@ class SequenceWriter:
 
     # ------------------------------------------------------------------------ per frame
     def image(self, folder: str, n: int, rgb: np.ndarray) -> None:
-        Image.fromarray(rgb).save(self.frame_path(folder, n), compress_level=self.level)
+        write_png(self.frame_path(folder, n), rgb, self.level)
 
     def png16(self, folder: str, n: int, values: np.ndarray) -> None:
         write_png16(self.frame_path(folder, n), values, self.level)
