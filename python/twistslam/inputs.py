@@ -64,7 +64,9 @@ def load_frame(sequence: Sequence, index: int) -> Frame:
             # a missing image is raised below with the frame's name; missing LiDAR is
             # already reported once when the sequence is opened
             warnings.simplefilter("ignore", MissingDataWarning)
-            frame = sequence[index]
+            # the stereo pipeline reads no LiDAR; sequences without frame() load everything
+            read = getattr(sequence, "frame", None)
+            frame = read(index, lidar=False) if callable(read) else sequence[index]
     except (OSError, ValueError) as exc:
         raise ValueError(f"frame {index}: {_unreadable(sequence, index) or exc}") from exc
     for folder, side in CAMERAS.items():

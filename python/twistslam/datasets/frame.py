@@ -34,7 +34,10 @@ class Frame:
 
 @runtime_checkable
 class Sequence(Protocol):
-    """What the pipeline needs from a dataset sequence (KITTI tracking, simulator, ...)."""
+    """What the pipeline needs from a dataset sequence (KITTI tracking, simulator, ...).
+
+    Optional: ``frame(index, lidar=False)``, a frame without its LiDAR scan (used by the
+    stereo pipeline's loader when present; otherwise it indexes the sequence)."""
 
     calib: Calibration
 

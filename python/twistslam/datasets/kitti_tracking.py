@@ -175,6 +175,12 @@ class KittiTracking:
         return path
 
     def __getitem__(self, index: int) -> Frame:
+        return self.frame(index)
+
+    def frame(self, index: int, *, lidar: bool = True) -> Frame:
+        """Frame ``index``; ``lidar=False`` leaves ``points_c``/``points_velo`` as ``None``
+        without reading the scan (the stereo pipeline's loader: a KITTI scan costs about as
+        much to read and transform as one image to decode)."""
         n = len(self)
         if not isinstance(index, (int, np.integer)):
             raise TypeError(f"frame index must be an integer, got {type(index).__name__}")
@@ -184,7 +190,7 @@ class KittiTracking:
 
         left = self._sensor_file("image_02", i)
         right = self._sensor_file("image_03", i)
-        velo = self._sensor_file("velodyne", i)
+        velo = self._sensor_file("velodyne", i) if lidar else None
         points_velo = points_c = None
         if velo is not None:
             points_velo = read_velodyne(velo)
