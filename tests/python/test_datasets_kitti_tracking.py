@@ -182,6 +182,23 @@ def test_frames_load_lazily(kitti_root):
         seq[4]
 
 
+def test_frame_without_lidar_does_not_read_the_scan(kitti_root):
+    seq = KittiTracking(kitti_root, SEQ)
+    (kitti_root / "training" / "velodyne" / SEQ / "000004.bin").write_bytes(b"\0" * 20)
+    frame = seq.frame(4, lidar=False)  # the corrupt scan is never opened
+    assert frame.points_c is None and frame.points_velo is None
+    assert frame.image_left is not None and frame.T_w_c_gt is not None
+    assert seq.frame(2).points_c is not None  # lidar=True (the default) is seq[i]
+
+
+def test_stereo_loader_skips_the_lidar(kitti_root):
+    from twistslam.inputs import load_frame
+
+    (kitti_root / "training" / "velodyne" / SEQ / "000004.bin").write_bytes(b"\0" * 20)
+    frame = load_frame(KittiTracking(kitti_root, SEQ), 4)
+    assert frame.index == 4 and frame.points_c is None and frame.image_right is not None
+
+
 def test_nan_points_are_dropped_with_a_warning(kitti_root):
     path = kitti_root / "training" / "velodyne" / SEQ / "000000.bin"
     points = np.fromfile(path, dtype=np.float32).reshape(-1, 4)
