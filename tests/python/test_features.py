@@ -11,7 +11,7 @@ import pytest
 from scipy.ndimage import gaussian_filter, map_coordinates
 
 from twistslam import geometry as g
-from twistslam._core import features as f
+from twistslam import features as f
 
 # P2 / P3 of KITTI tracking sequence 0000 (training/calib/0000.txt), images 1242 x 375.
 P2 = np.array([[721.5377, 0, 609.5593, 44.85728], [0, 721.5377, 172.854, 0.2163791],
