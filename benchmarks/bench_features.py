@@ -22,50 +22,18 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.ndimage import gaussian_filter, map_coordinates
 
 from twistslam import geometry
-from twistslam._core import features
+from twistslam import features
+from twistslam.sim.planes import KITTI_P2, KITTI_P3, KITTI_SIZE, PlaneScene
 
-P2 = np.array([[721.5377, 0, 609.5593, 44.85728], [0, 721.5377, 172.854, 0.2163791],
-               [0, 0, 1, 0.002745884]])
-P3 = np.array([[721.5377, 0, 609.5593, -339.5242], [0, 721.5377, 172.854, 2.199936],
-               [0, 0, 1, 0.002729905]])
-W, H = 1242, 375
-
-
-def texture(shape, seed):
-    rng = np.random.default_rng(seed)
-    acc = np.zeros(shape)
-    for sigma, weight in ((0.8, 0.6), (2.0, 0.8), (5.0, 1.0)):
-        n = gaussian_filter(rng.normal(size=shape), sigma)
-        acc += weight * n / n.std()
-    return (acc - acc.mean()) * (40.0 / acc.std()) + 128.0
+P2, P3, (W, H) = KITTI_P2, KITTI_P3, KITTI_SIZE
 
 
 def synthetic_pair(cam):
     """Three textured fronto-parallel planes, ray-cast for the left and right cameras."""
-    planes = [(40.0, (-40, -12, 40, 12)), (15.0, (-1.0, -3.0, 6.0, 1.5)), (7.0, (-5.0, -2.0, -0.5, 1.2))]
-    textures = []
-    for k, (z, (x0, y0, x1, y1)) in enumerate(planes):
-        texel = 1.3 * z / cam.fx
-        shape = (int(np.ceil((y1 - y0) / texel)) + 3, int(np.ceil((x1 - x0) / texel)) + 3)
-        textures.append((texel, texture(shape, k + 1)))
-    v, u = np.mgrid[0:H, 0:W].astype(float)
-    images = []
-    for offset, seed in ((cam.t_left, 100), (cam.t_right, 101)):
-        o = -np.asarray(offset)
-        best, img = np.full(u.shape, np.inf), np.zeros(u.shape)
-        for (z, (x0, y0, x1, y1)), (texel, tex) in zip(planes, textures):
-            s = z - o[2]
-            X = o[0] + s * (u - cam.cx) / cam.fx
-            Y = o[1] + s * (v - cam.cy) / cam.fy
-            take = (X >= x0) & (X <= x1) & (Y >= y0) & (Y <= y1) & (s < best)
-            best[take] = s
-            img[take] = map_coordinates(tex, [1 + (Y[take] - y0) / texel, 1 + (X[take] - x0) / texel], order=1)
-        img += np.random.default_rng(seed).normal(0, 1.0, img.shape)
-        images.append(np.clip(np.rint(img), 0, 255).astype(np.uint8))
-    return images
+    scene = PlaneScene.default(cam.fx)
+    return [scene.render(cam, right, seed)[0] for right, seed in ((False, 100), (True, 101))]
 
 
 def real_pair(data: Path):

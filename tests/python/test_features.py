@@ -1,84 +1,36 @@
 """ORB extraction and stereo matching bindings (twistslam._core.features).
 
-Stereo accuracy is checked on a pair rendered here: fronto-parallel textured planes ray-cast
-for KITTI sequence 0000's cameras 2 and 3, so every keypoint has a known disparity.
+Stereo accuracy is checked on a pair rendered by twistslam.sim.planes: fronto-parallel
+textured planes ray-cast for KITTI sequence 0000's cameras 2 and 3, so every keypoint has a
+known disparity.
 """
 
 import threading
 
 import numpy as np
 import pytest
-from scipy.ndimage import gaussian_filter, map_coordinates
 
 from twistslam import geometry as g
 from twistslam import features as f
+from twistslam.sim.planes import KITTI_P2, KITTI_P3, KITTI_SIZE, PlaneScene, texture
 
-# P2 / P3 of KITTI tracking sequence 0000 (training/calib/0000.txt), images 1242 x 375.
-P2 = np.array([[721.5377, 0, 609.5593, 44.85728], [0, 721.5377, 172.854, 0.2163791],
-               [0, 0, 1, 0.002745884]])
-P3 = np.array([[721.5377, 0, 609.5593, -339.5242], [0, 721.5377, 172.854, 2.199936],
-               [0, 0, 1, 0.002729905]])
-W, H = 1242, 375
+P2, P3, (W, H) = KITTI_P2, KITTI_P3, KITTI_SIZE
+SCENE = None
 
 
-def texture(shape, seed):
-    """Float texture, mean 128 / std 40: blurred noise at three scales."""
-    rng = np.random.default_rng(seed)
-    acc = np.zeros(shape)
-    for sigma, weight in ((0.8, 0.6), (2.0, 0.8), (5.0, 1.0)):
-        n = gaussian_filter(rng.normal(size=shape), sigma)
-        acc += weight * n / n.std()
-    return (acc - acc.mean()) * (40.0 / acc.std()) + 128.0
-
-
-class Plane:
-    """Textured rectangle at depth z of frame c, ~1.3 image px per texel."""
-
-    def __init__(self, z, x0, y0, x1, y1, seed, fx=721.5377):
-        self.z, self.x0, self.y0, self.x1, self.y1 = z, x0, y0, x1, y1
-        self.texel = 1.3 * z / fx
-        shape = (int(np.ceil((y1 - y0) / self.texel)) + 3, int(np.ceil((x1 - x0) / self.texel)) + 3)
-        self.texture = texture(shape, seed)
-
-
-PLANES = None
-
-
-def planes():
-    global PLANES
-    if PLANES is None:
-        PLANES = [Plane(40.0, -40, -12, 40, 12, 1), Plane(15.0, -1.0, -3.0, 6.0, 1.5, 2),
-                  Plane(7.0, -5.0, -2.0, -0.5, 1.2, 3)]
-    return PLANES
+def scene() -> PlaneScene:
+    global SCENE
+    if SCENE is None:
+        SCENE = PlaneScene.default()
+    return SCENE
 
 
 def cast(cam, offset, u, v):
-    """Nearest plane hit of the rays of pixels (u, v): (plane id, X_c (..., 3))."""
-    o = -np.asarray(offset)
-    d = np.stack([(u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, np.ones_like(u)], -1)
-    best = np.full(u.shape, np.inf)
-    ids = np.full(u.shape, -1)
-    X = np.zeros(u.shape + (3,))
-    for k, p in enumerate(planes()):
-        s = p.z - o[2]
-        P = o + s * d
-        inside = (P[..., 0] >= p.x0) & (P[..., 0] <= p.x1) & (P[..., 1] >= p.y0) & (P[..., 1] <= p.y1)
-        take = inside & (s < best)
-        best[take], ids[take], X[take] = s, k, P[take]
-    return ids, X
+    return scene().cast(cam, offset, u, v)
 
 
 def render(cam, right, seed):
-    v, u = np.mgrid[0:H, 0:W].astype(float)
-    ids, X = cast(cam, cam.t_right if right else cam.t_left, u, v)
-    img = np.zeros((H, W))
-    for k, p in enumerate(planes()):
-        m = ids == k
-        tx = 1.0 + (X[m, 0] - p.x0) / p.texel
-        ty = 1.0 + (X[m, 1] - p.y0) / p.texel
-        img[m] = map_coordinates(p.texture, [ty, tx], order=1)
-    img += np.random.default_rng(seed).normal(0, 1.0, img.shape)
-    return np.clip(np.rint(img), 0, 255).astype(np.uint8), ids
+    return scene().render(cam, right, seed)
 
 
 @pytest.fixture(scope="module")
