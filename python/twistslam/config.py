@@ -15,12 +15,13 @@ single place where those names and defaults are defined.
 from __future__ import annotations
 
 import math
-import types
 import typing
 from collections.abc import Iterable, Mapping
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
-from typing import Any, Union
+from typing import Any
+
+from ._settings import coerce
 
 
 def param(default: Any, why: str, unit: str = "", *, lo: float | None = None,
@@ -179,8 +180,6 @@ SECTIONS: dict[str, type] = {
     "run": RunConfig,
 }
 _NOT_FOR_CORE = ("run",)
-_TRUE = {"true", "yes", "on", "1"}
-_FALSE = {"false", "no", "off", "0"}
 
 
 @dataclass
@@ -281,7 +280,7 @@ class Config:
                 f"unknown key {dotted!r}; keys of section {section_name!r}: "
                 + ", ".join(f.name for f in fields(section_type))
             )
-        setattr(getattr(self, section_name), key, _coerce(value, types_[key], dotted))
+        setattr(getattr(self, section_name), key, coerce(value, types_[key], dotted))
 
     def validate(self) -> None:
         """Check every value's type and range; raises ``ValueError`` naming the key."""
@@ -292,7 +291,7 @@ class Config:
             types_ = typing.get_type_hints(section_type)
             for f in fields(section_type):
                 key = f"{name}.{f.name}"
-                value = _coerce(getattr(section, f.name), types_[f.name], key)
+                value = coerce(getattr(section, f.name), types_[f.name], key)
                 setattr(section, f.name, value)
                 _check_range(value, f.metadata, key)
         if self.stereo.min_depth >= self.stereo.max_depth:
@@ -372,60 +371,6 @@ def _yaml_scalar(value: Any) -> str:
     if isinstance(value, int):
         return str(value)
     return json.dumps(str(value))
-
-
-def _type_name(tp: Any) -> str:
-    return getattr(tp, "__name__", None) or str(tp).replace("typing.", "")
-
-
-def _coerce(value: Any, tp: Any, key: str) -> Any:
-    """``value`` (typed, or a string from the command line) as type ``tp``."""
-    origin = typing.get_origin(tp)
-    if origin in (Union, types.UnionType):
-        args = [a for a in typing.get_args(tp) if a is not type(None)]
-        if value is None or (isinstance(value, str) and value.strip().lower() in ("none", "null", "")):
-            return None
-        return _coerce(value, args[0], key)
-    if origin is list:
-        (item_type,) = typing.get_args(tp)
-        if isinstance(value, str):
-            text = value.strip().strip("[]").strip()
-            value = [v.strip() for v in text.split(",")] if text else []
-        elif not isinstance(value, (list, tuple)):
-            value = [value]
-        return [_coerce(v, item_type, f"{key}[{i}]") for i, v in enumerate(value)]
-    bad = ValueError(f"{key}: expected {_type_name(tp)}, got {value!r}")
-    if tp is bool:
-        if isinstance(value, bool):
-            return value
-        if isinstance(value, str) and value.strip().lower() in _TRUE | _FALSE:
-            return value.strip().lower() in _TRUE
-        if isinstance(value, int) and value in (0, 1):
-            return bool(value)
-        raise bad
-    if isinstance(value, bool) or value is None:
-        raise bad  # True is an int in Python; never a count or a threshold here
-    if tp is int:
-        if isinstance(value, str):
-            try:
-                value = float(value.strip()) if any(c in value for c in ".eE") else int(value)
-            except ValueError:
-                raise bad from None
-        if isinstance(value, float) and value.is_integer():
-            return int(value)
-        if isinstance(value, int):
-            return value
-        raise bad
-    if tp is float:
-        try:
-            return float(value)
-        except (TypeError, ValueError):
-            raise bad from None
-    if tp is str:
-        if isinstance(value, (str, int, float)):
-            return str(value)
-        raise bad
-    raise TypeError(f"{key}: unsupported config type {tp!r}")  # a bug in this module
 
 
 def _check_range(value: Any, meta: Mapping[str, Any], key: str) -> None:

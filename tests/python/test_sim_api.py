@@ -50,6 +50,13 @@ def test_overrides_and_config_record(tmp_path):
     assert SimConfig().lidar.range_noise == 0.02  # defaults untouched
     with pytest.raises(ValueError, match="unknown simulator setting"):
         SimConfig().with_overrides({"lidar.range_nosie": 1.0})
+    # strings from --set are converted with the field's type, as twistslam.Config does
+    cfg = SimConfig().with_overrides({"output.flow": "off", "frames": "12", "oracle.score_true": "8, 2"})
+    assert (cfg.output.flow, cfg.frames, cfg.oracle.score_true) == (False, 12, (8.0, 2.0))
+    with pytest.raises(ValueError, match=r"simulator setting 'frames': expected int, got 'many'"):
+        SimConfig().with_overrides({"frames": "many"})
+    with pytest.raises(ValueError, match=r"'traffic.ego_speed': expected 2 values"):
+        SimConfig().with_overrides({"traffic.ego_speed": [1, 2, 3]})
     out = generate(tmp_path / "o", frames=1, lidar__enabled=False, output__flow=False, **TINY)
     record = json.loads((out / "training" / "sim" / "0000.json").read_text())
     assert record["lidar"]["enabled"] is False and record["scenario"] == "urban"

@@ -7,9 +7,12 @@ edit its fields; nothing else changes the behaviour of a run.
 
 from __future__ import annotations
 
+import typing
 from dataclasses import dataclass, field, fields, is_dataclass, replace
 from pathlib import Path
 from typing import Any
+
+from .._settings import coerce
 
 #: the KITTI calibration used when none is given (KITTI tracking training sequence 0000)
 DEFAULT_CALIB = Path(__file__).resolve().parents[3].parent / "shared/data/kitti_tracking/training/calib/0000.txt"
@@ -192,11 +195,6 @@ def _set(cfg: Any, parts: list[str], value: Any) -> None:
     name = parts[-1]
     if not is_dataclass(target) or name not in {f.name for f in fields(target)}:
         raise ValueError(f"unknown simulator setting {'.'.join(parts)!r}")
-    old = getattr(target, name)
-    if isinstance(old, tuple) and isinstance(value, (list, tuple)):
-        value = tuple(type(o)(v) for o, v in zip(old, value))
-    elif isinstance(old, bool) and isinstance(value, str):
-        value = value.lower() in ("1", "true", "yes", "on")
-    elif isinstance(old, (int, float)) and not isinstance(old, bool) and isinstance(value, str):
-        value = type(old)(float(value)) if isinstance(old, int) else float(value)
+    hints = typing.get_type_hints(type(target))
+    value = coerce(value, hints[name], f"simulator setting {'.'.join(parts)!r}")
     setattr(target, name, value)
