@@ -7,18 +7,14 @@
 #include <random>
 #include <vector>
 
+#include "common/kitti_camera.hpp"
 #include "geometry/se3.hpp"
 #include "geometry/stereo_camera.hpp"
 #include "optim/optim.hpp"
 
 namespace twistslam::optim::testing {
 
-inline geometry::StereoCamera kitti_camera() {
-  Mat34 P2, P3;
-  P2 << 721.5377, 0, 609.5593, 44.85728, 0, 721.5377, 172.854, 0.2163791, 0, 0, 1, 0.002745884;
-  P3 << 721.5377, 0, 609.5593, -339.5242, 0, 721.5377, 172.854, 2.199936, 0, 0, 1, 0.002729905;
-  return geometry::StereoCamera::from_kitti(P2, P3, 1242, 375);
-}
+using test_scenes::kitti_camera;
 
 inline double rotation_error_deg(const Mat4& A, const Mat4& B) {
   const Mat3 dR = A.topLeftCorner<3, 3>().transpose() * B.topLeftCorner<3, 3>();
