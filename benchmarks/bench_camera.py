@@ -1,4 +1,4 @@
-"""Camera accuracy and speed of twistslam (stereo) side by side with KISS-ICP (LiDAR).
+"""Camera accuracy and speed of twistslam (stereo) side by side with KISS-ICP and small_gicp (LiDAR).
 
     .venv/bin/python benchmarks/bench_camera.py                        # cached urban-seed0-n100
     .venv/bin/python benchmarks/bench_camera.py --sweep --memory       # + ORB / BA sweep, peak RSS
@@ -9,7 +9,7 @@ The sequence is either an existing KITTI-layout one (``--root DIR --seq 0000``) 
 one, generated once into ``CACHE/<scenario>-seed<seed>-n<frames>`` (the cache ``make demo``
 uses; an existing complete sequence is reused).
 
-Both systems run in this process, one after the other, on the same sequence:
+The three systems run in this process, one after the other, on the same sequence:
 
 * twistslam: :func:`twistslam.run` on the stereo images, with the demo's settings (movable
   classes masked with the sequence's panoptic labels when it has them, eq. 3) plus ``--set``.
@@ -20,9 +20,12 @@ Both systems run in this process, one after the other, on the same sequence:
   camera frame, ``T_w_c = T_c_velo T_velo0_velo_i T_c_velo^-1`` (world = camera at frame 0).
   On real KITTI scans KISS-ICP's KITTI intrinsic correction is applied, as its KITTI reader
   does; the simulator's scans are exact and left as they are.
+* small_gicp (``small_gicp`` from PyPI) as frame-to-frame GICP odometry on the same scans
+  (its odometry example's settings, the last motion as the initial guess, 2 threads).
+  ms/frame is the downsampling + covariance estimation + alignment of each scan.
 
-Both trajectories are scored with :func:`twistslam.eval.camera.evaluate_camera` against the
-sequence's ground truth (ATE after SE(3) alignment). Prints one table with both rows,
+All trajectories are scored with :func:`twistslam.eval.camera.evaluate_camera` against the
+sequence's ground truth (ATE after SE(3) alignment). Prints one table with a row per system,
 then with ``--sweep`` how ORB feature count and local-BA window move accuracy and speed, and
 with ``--memory`` the peak RSS of each system run alone in a fresh subprocess. The 1-minute
 load average is printed beside every timing: the 2 cores may be shared.
@@ -132,32 +135,65 @@ def run_ours(sequence, config, n: int) -> dict:
     }
 
 
-def kiss_poses(sequence, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """KISS-ICP on the first ``n`` scans: ``(T_velo0_velo (n, 4, 4), register ms, read ms)``."""
-    from kiss_icp.config import load_config
-    from kiss_icp.kiss_icp import KissICP
+def lidar_scans(sequence, n: int):
+    """``(scan (N, 3) float64, read ms)`` of the first ``n`` frames; real KITTI scans get the
+    intrinsic correction kiss_icp's KITTI reader applies (the simulator's scans are exact)."""
     from kiss_icp.pybind import kiss_icp_pybind
 
     from twistslam.datasets import read_velodyne
 
+    correct = not is_simulated(sequence)
+    for i in range(n):
+        t0 = time.perf_counter()
+        points = read_velodyne(sequence.base / "velodyne" / sequence.seq / f"{i:06d}.bin")
+        points = points[:, :3].astype(np.float64)
+        if correct:
+            points = np.asarray(kiss_icp_pybind._correct_kitti_scan(
+                kiss_icp_pybind._Vector3dVector(points)))
+        yield points, 1e3 * (time.perf_counter() - t0)
+
+
+def kiss_poses(sequence, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """KISS-ICP on the first ``n`` scans: ``(T_velo0_velo (n, 4, 4), register ms, read ms)``."""
+    from kiss_icp.config import load_config
+    from kiss_icp.kiss_icp import KissICP
+
     config = load_config(None)  # defaults; voxel size from max_range, as kiss_icp's pipeline
     odometry = KissICP(config)
-    correct = not is_simulated(sequence)
     poses = np.zeros((n, 4, 4))
     register_ms, read_ms = np.zeros(n), np.zeros(n)
     no_timestamps = np.array([])
-    for i in range(n):
+    for i, (points, read) in enumerate(lidar_scans(sequence, n)):
         t0 = time.perf_counter()
-        scan = read_velodyne(sequence.base / "velodyne" / sequence.seq / f"{i:06d}.bin")
-        points = scan[:, :3].astype(np.float64)
-        if correct:  # what kiss_icp's KITTI reader does to every raw HDL-64E scan
-            points = np.asarray(kiss_icp_pybind._correct_kitti_scan(
-                kiss_icp_pybind._Vector3dVector(points)))
-        t1 = time.perf_counter()
         odometry.register_frame(points, no_timestamps)
-        t2 = time.perf_counter()
+        register_ms[i], read_ms[i] = 1e3 * (time.perf_counter() - t0), read
         poses[i] = odometry.last_pose
-        read_ms[i], register_ms[i] = 1e3 * (t1 - t0), 1e3 * (t2 - t1)
+    return poses, register_ms, read_ms
+
+
+def gicp_poses(sequence, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """small_gicp frame-to-frame GICP odometry (its odometry example's settings: 0.25 m
+    downsampling, 10 neighbours, 1 m correspondences; the last motion as the initial guess),
+    2 threads like ours: ``(T_velo0_velo (n, 4, 4), register ms, read ms)``; register ms
+    includes the downsampling and covariance estimation of each scan."""
+    import small_gicp
+
+    poses = np.zeros((n, 4, 4))
+    poses[0] = np.eye(4)
+    register_ms, read_ms = np.zeros(n), np.zeros(n)
+    previous, motion = None, np.eye(4)
+    for i, (points, read) in enumerate(lidar_scans(sequence, n)):
+        t0 = time.perf_counter()
+        cloud, tree = small_gicp.preprocess_points(points, downsampling_resolution=0.25,
+                                                   num_neighbors=10, num_threads=2)
+        if previous is not None:
+            result = small_gicp.align(previous[0], cloud, previous[1], motion,
+                                      registration_type="GICP", max_correspondence_distance=1.0,
+                                      num_threads=2)
+            motion = result.T_target_source
+            poses[i] = poses[i - 1] @ motion
+        register_ms[i], read_ms[i] = 1e3 * (time.perf_counter() - t0), read
+        previous = (cloud, tree)
     return poses, register_ms, read_ms
 
 
@@ -166,9 +202,9 @@ def velo_to_camera(poses_velo: np.ndarray, T_c_velo: np.ndarray) -> np.ndarray:
     return T_c_velo @ poses_velo @ np.linalg.inv(T_c_velo)
 
 
-def run_kiss(sequence, n: int) -> dict:
+def run_lidar_peer(sequence, n: int, poses_fn) -> dict:
     cpu0, t0 = time.process_time(), time.perf_counter()
-    poses_velo, register_ms, read_ms = kiss_poses(sequence, n)
+    poses_velo, register_ms, read_ms = poses_fn(sequence, n)
     wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
     est = velo_to_camera(poses_velo, sequence.calib.T_c_velo)
     return {
@@ -320,27 +356,31 @@ def main(argv=None) -> int:
     print(f"sequence: {description}, {n} frames, {path_m:.0f} m driven")
     print(f"twistslam {twistslam.__version__}: {mask_note}"
           + (f"; --set {' '.join(args.set)}" if args.set else ""))
-    print(f"KISS-ICP {kiss_version} (PyPI), default config"
-          + ("" if is_simulated(sequence) else ", KITTI scan correction"))
+    print(f"KISS-ICP {kiss_version} (PyPI), default config; small_gicp (PyPI), frame-to-frame "
+          "GICP" + ("" if is_simulated(sequence) else "; KITTI scan correction for both"))
     print(f"{os.cpu_count()} cores, load average {'/'.join(f'{x:.2f}' for x in os.getloadavg())} "
           f"(1/5/15 min) at start")
 
     ours = run_ours(sequence, config, n)
-    kiss = run_kiss(sequence, n)
+    peers = [("KISS-ICP (LiDAR)", run_lidar_peer(sequence, n, kiss_poses)),
+             ("small_gicp (LiDAR)", run_lidar_peer(sequence, n, gicp_poses))]
     print(f"\ncamera trajectory vs ground truth ({n} frames)")
-    print_table("system", [("twistslam (stereo)", ours), ("KISS-ICP (LiDAR)", kiss)])
-    om, km = ours["metrics"], kiss["metrics"]
-    ahead = [name for name, a, b in (("RPE_t", om.rpe_t_mean, km.rpe_t_mean),
-                                      ("RPE_R", om.rpe_r_mean, km.rpe_r_mean),
-                                      ("ATE", om.ate_rmse, km.ate_rmse)) if a < b]
+    print_table("system", [("twistslam (stereo)", ours), *peers])
+    om = ours["metrics"]
+    for name, peer in peers:
+        pm = peer["metrics"]
+        ahead = [k for k, a, b in (("RPE_t", om.rpe_t_mean, pm.rpe_t_mean),
+                                    ("RPE_R", om.rpe_r_mean, pm.rpe_r_mean),
+                                    ("ATE", om.ate_rmse, pm.ate_rmse)) if a < b]
+        print(f"vs {name.split()[0]}: ahead on {', '.join(ahead) if ahead else 'nothing'} "
+              f"(ratios ours/peer: RPE_t {om.rpe_t_mean / pm.rpe_t_mean:.2f}, "
+              f"RPE_R {om.rpe_r_mean / pm.rpe_r_mean:.2f}, ATE {om.ate_rmse / pm.ate_rmse:.2f})")
     print(f"twistslam: {ours['lost']} lost, {ours['keyframes']} keyframes, "
-          f"{ours['map_points']} map points; ahead of KISS-ICP on "
-          f"{', '.join(ahead) if ahead else 'nothing'}"
-          f" (ratios ours/KISS: RPE_t {om.rpe_t_mean / km.rpe_t_mean:.2f}, "
-          f"RPE_R {om.rpe_r_mean / km.rpe_r_mean:.2f}, ATE {om.ate_rmse / km.ate_rmse:.2f})")
-    print(f"ms/f: twistslam = loop wall time per frame (reading overlapped); KISS-ICP = "
-          f"register_frame only (reading a scan: median {kiss['read_ms']:.1f} ms more). "
-          f"CPU ms/f = process CPU time (all threads) / frames. load 1m = after the run.")
+          f"{ours['map_points']} map points")
+    print(f"ms/f: twistslam = loop wall time per frame (reading overlapped); LiDAR peers = "
+          f"registration only (KISS-ICP register_frame; small_gicp preprocess + align), reading "
+          f"a scan is a median {peers[0][1]['read_ms']:.1f} ms more. CPU ms/f = process CPU "
+          f"time (all threads) / frames. load 1m = after the run.")
 
     if args.sweep:
         print(f"\nsweep: one setting changed from the row above (twistslam, {n} frames)")
