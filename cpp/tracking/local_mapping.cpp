@@ -162,7 +162,7 @@ void System::local_bundle_adjustment(int keyframe_id) {
 
   // Points seen by at least two keyframes of the problem. A point seen once is exactly
   // determined by its own observation (stereo) or not at all (mono): its Schur complement
-  // is zero, so it tells the poses nothing and only costs solver time (~40 % of the points).
+  // is zero, so it tells the poses nothing and only costs solver time (~half of the window's points).
   std::vector<int> point_ids;
   std::vector<std::pair<int, int>> obs_link;  // (point id, keyframe id) per observation
   for (int pid : candidates) {
