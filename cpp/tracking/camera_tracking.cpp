@@ -72,6 +72,26 @@ bool System::track_with_motion_model(Frame& frame, double radius_scale) {
   return optimize_frame_pose(frame, /*drop_outliers=*/true) >= kMinMotionInliers;
 }
 
+bool System::relocalize_in_local_map(Frame& frame) {
+  // After a loss the last frame has no matches to follow: search the local map of the last
+  // tracked frame from the predicted pose, in the motion model's wide window. Short losses
+  // (a blank frame, a truck filling the view) resume in the same map instead of a new one.
+  std::vector<int> points;
+  std::unordered_map<int, bool> seen;
+  for (int kf : local_keyframes_) {
+    if (!map_.has_keyframe(kf)) continue;
+    for (int pid : map_.keyframe(kf).point_ids)
+      if (pid >= 0 && !seen[pid] && map_.has_point(pid)) points.push_back(pid), seen[pid] = true;
+  }
+  if (points.empty()) return false;
+  const ProjectionSearch search{options_.tracking.search_radius_px * 2, options_.tracking.max_hamming,
+                                options_.tracking.ratio_test};
+  frame.clear_matches();
+  if (search_by_projection(frame, map_, points, camera_, extractor_.scale_factors(), search) < kMinMotionMatches)
+    return false;
+  return optimize_frame_pose(frame, /*drop_outliers=*/true) >= kMinMotionInliers;
+}
+
 bool System::track_local_map(Frame& frame) {
   // Local keyframes: every keyframe seeing a matched point, ranked by how many it sees.
   std::unordered_map<int, int> votes;

@@ -126,9 +126,13 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
 
   if (state_ == State::kTracking || state_ == State::kLost) {
     // Without a velocity (the frame after a map start) the prediction is "no motion", off by a
-    // whole frame of driving: search four times as wide. After a loss: twice as wide.
-    const double radius_scale = !has_velocity_ ? 4.0 : state_ == State::kLost ? 2.0 : 1.0;
-    tracked = track_with_motion_model(frame, radius_scale);
+    // whole frame of driving: search four times as wide.
+    // After a loss the last frame has no matches: relocalise in the last local map instead.
+    tracked = state_ == State::kLost ? relocalize_in_local_map(frame)
+                                     : track_with_motion_model(frame, has_velocity_ ? 1.0 : 4.0);
+    // The motion model lost its matches (an unexpected motion): try the local map before
+    // giving up on this map.
+    if (!tracked && state_ == State::kTracking) tracked = relocalize_in_local_map(frame);
     timer.lap("track_motion");
     if (tracked) tracked = track_local_map(frame);
     timer.lap("track_local_map");

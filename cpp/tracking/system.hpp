@@ -62,6 +62,7 @@ class System {
   // camera_tracking.cpp
   bool track_with_motion_model(Frame& frame, double radius_scale);
   bool track_local_map(Frame& frame);
+  bool relocalize_in_local_map(Frame& frame);
   int optimize_frame_pose(Frame& frame, bool drop_outliers);
   // local_mapping.cpp
   int count_initial_points(const Frame& frame) const;

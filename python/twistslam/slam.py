@@ -26,9 +26,10 @@ class TrackedFrame:
     """The system's output for one frame.
 
     ``status`` is ``"initialized"`` (map started here), ``"ok"``, ``"lost"`` (too few inliers
-    or no usable image: ``T_w_c`` is a prediction) or ``"relocalized"`` (tracking restarted
-    after a loss). ``timings_ms`` holds the core's stages plus ``"track"``, the wall time of
-    the whole call.
+    or no usable image: ``T_w_c`` is a prediction) or ``"relocalized"`` (the first frame
+    tracked after a loss: found again in the last local map, or the start of a new map
+    segment). ``timings_ms`` holds the core's stages plus ``"track"``, the wall time of the
+    whole call.
     """
 
     index: int

@@ -104,23 +104,45 @@ TEST(TrackingSystem, TracksARenderedSequenceWithKnownMotion) {
   EXPECT_LT(step_error, 0.006);  // m per frame, of 0.25 m steps (seen: 2.5 mm)
 }
 
-TEST(TrackingSystem, BlankFrameIsLostThenTrackingResumes) {
-  tracking::System system(kitti_camera(), tracking::SlamOptions{});
+// Tracks frames [0, n) with the frames in `blank` replaced by uniform grey; returns statuses.
+std::vector<tracking::Status> track_with_blanks(tracking::System& system, int n,
+                                                const std::vector<int>& blank) {
   const auto& frames = sequence();
-  const cv::Mat blank(frames[0].left.size(), CV_8UC1, cv::Scalar(128));
+  const cv::Mat grey(frames[0].left.size(), CV_8UC1, cv::Scalar(128));
   std::vector<tracking::Status> status;
-  for (int i = 0; i < 10; ++i) {
-    const bool is_blank = i == 5;
-    const tracking::TrackResult r = system.track(i, 0.1 * i, is_blank ? blank : frames[i].left,
-                                                 is_blank ? blank : frames[i].right);
+  for (int i = 0; i < n; ++i) {
+    const bool is_blank = std::count(blank.begin(), blank.end(), i) > 0;
+    const tracking::TrackResult r = system.track(i, 0.1 * i, is_blank ? grey : frames[i].left,
+                                                 is_blank ? grey : frames[i].right);
     status.push_back(r.status);
     // lost: the pose is the constant-velocity prediction, still close to the truth
-    EXPECT_LT(translation_error(r.T_w_c, gt_pose(i)), is_blank ? 0.1 : 0.05) << "frame " << i;
+    EXPECT_LT(translation_error(r.T_w_c, gt_pose(i)), is_blank ? 0.1 : 0.03) << "frame " << i;
   }
+  return status;
+}
+
+int num_segments(const tracking::System& system) {
+  int last = -1;
+  for (const auto& [id, kf] : system.map().keyframes()) last = std::max(last, kf.segment);
+  return last + 1;
+}
+
+TEST(TrackingSystem, BlankFrameIsLostThenRelocalisedInTheSameMap) {
+  tracking::System system(kitti_camera(), tracking::SlamOptions{});
+  const std::vector<tracking::Status> status = track_with_blanks(system, 10, {5});
   EXPECT_EQ(status[5], tracking::Status::kLost);
-  EXPECT_TRUE(status[6] == tracking::Status::kOk || status[6] == tracking::Status::kRelocalized)
-      << tracking::to_string(status[6]);
+  EXPECT_EQ(status[6], tracking::Status::kRelocalized);
   for (int i : {7, 8, 9}) EXPECT_EQ(status[i], tracking::Status::kOk) << i;
+  EXPECT_EQ(num_segments(system), 1);  // found the old map again: no restart
+}
+
+TEST(TrackingSystem, ThreeBlankFramesAreLostThenTrackingResumes) {
+  tracking::System system(kitti_camera(), tracking::SlamOptions{});
+  const std::vector<tracking::Status> status = track_with_blanks(system, 12, {5, 6, 7});
+  for (int i : {5, 6, 7}) EXPECT_EQ(status[i], tracking::Status::kLost) << i;
+  EXPECT_EQ(status[8], tracking::Status::kRelocalized);
+  for (int i : {9, 10, 11}) EXPECT_EQ(status[i], tracking::Status::kOk) << i;
+  EXPECT_LE(num_segments(system), 2);
 }
 
 TEST(TrackingSystem, DynamicClassesNeverBecomeMapPoints) {
