@@ -511,7 +511,7 @@ def test_end_to_end_blank_frame_is_lost_then_recovered(sim_root, tmp_path):
     assert result.status[blank] == "lost", list(result.status)
     assert set(result.status[:blank]) <= {"initialized", "ok"}
     after = list(result.status[blank + 1:])
-    assert after[0] in ("relocalized", "ok") and "lost" not in after[3:], after
+    assert after[0] == "relocalized" and set(after[1:]) == {"ok"}, after
     # the trajectory after the loss is still right frame to frame
     gt = KittiTracking(root, SEQ).gt_poses
     est = np.full((SIM_FRAMES, 4, 4), np.nan)
@@ -519,7 +519,9 @@ def test_end_to_end_blank_frame_is_lost_then_recovered(sim_root, tmp_path):
     est[good] = result.camera_poses[good]
     from twistslam.eval.camera import evaluate_camera
 
-    assert evaluate_camera(gt, est).rpe_t_mean < 0.1
+    m = evaluate_camera(gt, est)
+    # relocalised in the same map: the trajectory stays consistent, not just frame to frame
+    assert m.rpe_t_mean < 0.03 and m.ate_rmse < 0.1, m  # seen: 0.009, 0.017
 
 
 def test_end_to_end_blank_right_image_never_crashes(sim_root, tmp_path):
