@@ -74,7 +74,7 @@ bool System::track_with_motion_model(Frame& frame, double radius_scale) {
 
 bool System::relocalize_in_local_map(Frame& frame) {
   // After a loss the last frame has no matches to follow: search the local map of the last
-  // tracked frame from the predicted pose, in the motion model's wide window. Short losses
+  // tracked frame from the predicted pose, in twice the motion model's window. Short losses
   // (a blank frame, a truck filling the view) resume in the same map instead of a new one.
   std::vector<int> points;
   std::unordered_map<int, bool> seen;
