@@ -39,7 +39,8 @@ class OrbConfig:
 
     num_features: int = param(3000, "ORB-SLAM2 uses 2000 on KITTI; 3000 cuts the rotation RPE "
                               "by ~20 % on the simulator (urban 0.0139 -> 0.0119, static "
-                              "0.0148 -> 0.0123 deg/frame) for ~+2 ms of features", lo=1)
+                              "0.0148 -> 0.0123 deg/frame) for ~+2 ms of features and more BA "
+                              "points (paid by local_ba's shorter schedule)", lo=1)
     scale_factor: float = param(1.2, "ORB-SLAM2's pyramid ratio: fine scale steps", lo=1.0001)
     num_levels: int = param(4, "1.2^3 = 1.7x scale range: enough between frames 2 apart, and "
                             "coarse levels localise to +-2 px (ORB-SLAM2's 8 levels: rotation "
