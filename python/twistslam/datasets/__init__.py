@@ -5,6 +5,7 @@ Every reader returns numpy arrays or :class:`ObjectTable`; every sequence yields
 """
 
 from .calibration import Calibration, read_calibration, write_calibration
+from .data_root import DATA_ENV, data_path, data_root
 from .detections import DETECTION_CLASSES, read_detections
 from .frame import Frame, Sequence
 from .kitti_tracking import KittiTracking
@@ -24,6 +25,7 @@ from .registry import DATASETS, open_sequence, register_dataset
 from .sensors import MissingDataWarning, read_image, read_timestamps, read_velodyne, write_velodyne
 
 __all__ = [
+    "DATA_ENV",
     "DATASETS",
     "DETECTION_CLASSES",
     "DONT_CARE",
@@ -36,6 +38,8 @@ __all__ = [
     "Sequence",
     "box_poses",
     "camera_poses_to_oxts",
+    "data_path",
+    "data_root",
     "object_tracks",
     "open_sequence",
     "oxts_to_camera_poses",
