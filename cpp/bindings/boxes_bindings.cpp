@@ -132,6 +132,23 @@ Returns
         "boxes_a"_a, "boxes_b"_a,
         iou_doc("3D IoU: bird-view intersection times the vertical overlap over the union volume.", 7)
             .c_str());
+  m.def("box_giou_bev",
+        [](py::handle a, py::handle b) {
+          return pairwise<g::Box3D>(boxes_from(as_rows(a, "boxes_a", 7)),
+                                    boxes_from(as_rows(b, "boxes_b", 7)), &g::giou_bev);
+        },
+        "boxes_a"_a, "boxes_b"_a,
+        "Bird-view generalized IoU: IoU - (hull - union) / hull, the hull being the convex hull\n"
+        "of both rectangles. (N, M) values in [-1, 1]; -1 for degenerate boxes.");
+  m.def("box_giou_3d",
+        [](py::handle a, py::handle b) {
+          return pairwise<g::Box3D>(boxes_from(as_rows(a, "boxes_a", 7)),
+                                    boxes_from(as_rows(b, "boxes_b", 7)), &g::giou_3d);
+        },
+        "boxes_a"_a, "boxes_b"_a,
+        "3D generalized IoU: the bird-view hull times the union of the vertical extents encloses\n"
+        "both boxes. (N, M) values in [-1, 1]; -1 for degenerate boxes (the association cost of\n"
+        "the object tracker is 1 - GIoU).");
 }
 
 }  // namespace twistslam::bindings

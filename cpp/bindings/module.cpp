@@ -10,6 +10,7 @@ void bind_geometry(py::module_& m);
 void bind_features(py::module_& m);
 void bind_optim(py::module_& m);
 void bind_slam(py::module_& m);
+void bind_objects(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -25,4 +26,6 @@ PYBIND11_MODULE(_core, m) {
   twistslam::bindings::bind_optim(optim);
   py::module_ slam = m.def_submodule("slam", "the stereo SLAM system");
   twistslam::bindings::bind_slam(slam);
+  py::module_ objects = m.def_submodule("objects", "object tracks, association, the 3D tracker");
+  twistslam::bindings::bind_objects(objects);
 }

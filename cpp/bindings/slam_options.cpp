@@ -1,45 +1,10 @@
 // Nested Python dict -> SlamOptions. Every key must be known (typos are errors, not silently
 // ignored defaults); missing keys keep the C++ default.
-#include <pybind11/stl.h>
-
-#include <functional>
-#include <map>
-
 #include "bindings/slam_options.hpp"
 
+#include "bindings/options_table.hpp"
+
 namespace twistslam::bindings {
-namespace {
-
-// Reads and writes one option field; the same table serves parsing and default_options().
-struct Field {
-  std::function<void(const py::handle&)> set;
-  std::function<py::object()> get;
-};
-
-template <typename T>
-Field set(T* field) {
-  return {[field](const py::handle& v) { *field = v.cast<T>(); }, [field] { return py::cast(*field); }};
-}
-
-void apply_section(const py::dict& section, const std::string& name, const std::map<std::string, Field>& keys) {
-  for (const auto& item : section) {
-    const std::string key = py::str(item.first);
-    const auto it = keys.find(key);
-    if (it == keys.end()) {
-      std::string valid;
-      for (const auto& k : keys) valid += (valid.empty() ? "" : ", ") + k.first;
-      throw py::value_error("options: unknown key '" + name + "." + key + "' (valid: " + valid + ")");
-    }
-    try {
-      it->second.set(item.second);
-    } catch (const py::cast_error&) {
-      throw py::type_error("options: '" + name + "." + key + "' has the wrong type (" +
-                           std::string(py::str(py::type::of(item.second))) + ")");
-    }
-  }
-}
-
-}  // namespace
 
 namespace {
 // Every option field of `o`, by section and key.
@@ -88,9 +53,7 @@ py::dict default_slam_options() {
   tracking::SlamOptions o;
   py::dict out;
   for (const auto& [section, fields] : option_table(o)) {
-    py::dict values;
-    for (const auto& [key, field] : fields) values[py::str(key)] = field.get();
-    out[py::str(section)] = values;
+    out[py::str(section)] = dump_section(fields);
   }
   return out;
 }

@@ -84,4 +84,57 @@ double iou_3d(const Box3D& a, const Box3D& b) {
   return inter / (a.volume() + b.volume() - inter);
 }
 
+std::vector<Vec2> convex_hull(std::vector<Vec2> p) {
+  std::sort(p.begin(), p.end(), [](const Vec2& a, const Vec2& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  if (p.size() < 3) return p;
+  const auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  std::vector<Vec2> hull(2 * p.size());
+  size_t k = 0;
+  for (size_t i = 0; i < p.size(); ++i) {  // lower chain
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  for (size_t i = p.size() - 1, lower = k + 1; i-- > 0;) {  // upper chain
+    while (k >= lower && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  hull.resize(k - 1);  // the last point repeats the first
+  return hull;
+}
+
+namespace {
+// Area of the convex hull of both bird-view rectangles.
+double bev_enclosing_area(const Box3D& a, const Box3D& b) {
+  const auto ca = a.bev_corners();
+  const auto cb = b.bev_corners();
+  std::vector<Vec2> all(ca.begin(), ca.end());
+  all.insert(all.end(), cb.begin(), cb.end());
+  return std::abs(polygon_signed_area(convex_hull(std::move(all))));
+}
+}  // namespace
+
+double giou_bev(const Box3D& a, const Box3D& b) {
+  if (!a.valid() || !b.valid()) return -1.0;
+  const double inter = bev_intersection_area(a, b);
+  const double uni = a.length * a.width + b.length * b.width - inter;
+  const double enclosing = bev_enclosing_area(a, b);
+  return inter / uni - (enclosing - uni) / enclosing;
+}
+
+double giou_3d(const Box3D& a, const Box3D& b) {
+  if (!a.valid() || !b.valid()) return -1.0;
+  const double top_a = a.center.y() - 0.5 * a.height, bottom_a = a.center.y() + 0.5 * a.height;
+  const double top_b = b.center.y() - 0.5 * b.height, bottom_b = b.center.y() + 0.5 * b.height;
+  const double overlap_h = std::max(0.0, std::min(bottom_a, bottom_b) - std::max(top_a, top_b));
+  const double span_h = std::max(bottom_a, bottom_b) - std::min(top_a, top_b);
+  const double inter = overlap_h > 0 ? bev_intersection_area(a, b) * overlap_h : 0.0;
+  const double uni = a.volume() + b.volume() - inter;
+  const double enclosing = bev_enclosing_area(a, b) * span_h;
+  return inter / uni - (enclosing - uni) / enclosing;
+}
+
 }  // namespace twistslam::geometry

@@ -21,4 +21,15 @@ double bev_intersection_area(const Box3D& a, const Box3D& b);
 double iou_bev(const Box3D& a, const Box3D& b);
 double iou_3d(const Box3D& a, const Box3D& b);
 
+// Convex hull (Andrew's monotone chain), counter-clockwise, no collinear points.
+std::vector<Vec2> convex_hull(std::vector<Vec2> points);
+
+// Generalized IoU (Rezatofighi et al. 2019): IoU - (C - U) / C with C the smallest enclosing
+// convex region: the convex hull of both bird-view rectangles (times the union of the
+// vertical extents in 3D). In [-1, 1]; unlike IoU it still ranks boxes that do not overlap
+// by how far apart they are, which 3D multi-object trackers use as association cost.
+// Degenerate boxes: -1.
+double giou_bev(const Box3D& a, const Box3D& b);
+double giou_3d(const Box3D& a, const Box3D& b);
+
 }  // namespace twistslam::geometry

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import types
 import typing
+from dataclasses import field
 from typing import Any, Union
 
 _TRUE = {"true", "yes", "on", "1"}
@@ -79,3 +80,12 @@ def coerce(value: Any, tp: Any, key: str) -> Any:
             return str(value)
         raise bad
     raise TypeError(f"{key}: unsupported config type {tp!r}")  # a bug in this module
+
+
+def param(default: Any, why: str, unit: str = "", *, lo: float | None = None,
+          hi: float | None = None) -> Any:
+    """A config field: ``default``, the one-line reason for it, its unit and its valid range."""
+    meta = {"why": why, "unit": unit, "lo": lo, "hi": hi}
+    if isinstance(default, list):
+        return field(default_factory=lambda: list(default), metadata=meta)
+    return field(default=default, metadata=meta)

@@ -1,10 +1,10 @@
 """Typed configuration of the SLAM system: every threshold and weight, named, with its default.
 
 A :class:`Config` is one dataclass per section (``orb``, ``stereo``, ``tracking``,
-``keyframes``, ``local_ba``, ``map``, ``run``). Each field carries its unit and the reason for
+``keyframes``, ``local_ba``, ``map``, ``run``, ``objects``). Each field carries its unit and the reason for
 its default (``dataclasses.fields(...)[i].metadata``), and both are written as comments into
 the YAML that :meth:`Config.to_yaml` saves beside every result. The C++ core receives all
-sections but ``run`` as the nested dictionary :meth:`Config.to_options`; this module is the
+sections but ``run`` and ``objects`` (read by the object tracker) as the nested dictionary :meth:`Config.to_options`; this module is the
 single place where those names and defaults are defined.
 
 >>> cfg = Config()
@@ -21,16 +21,10 @@ from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from ._settings import coerce
+from ._settings import coerce, param
+from .config_objects import ObjectsConfig
 
 
-def param(default: Any, why: str, unit: str = "", *, lo: float | None = None,
-          hi: float | None = None) -> Any:
-    """A config field: ``default``, the one-line reason for it, its unit and its valid range."""
-    meta = {"why": why, "unit": unit, "lo": lo, "hi": hi}
-    if isinstance(default, list):
-        return field(default_factory=lambda: list(default), metadata=meta)
-    return field(default=default, metadata=meta)
 
 
 @dataclass
@@ -179,8 +173,10 @@ SECTIONS: dict[str, type] = {
     "local_ba": LocalBAConfig,
     "map": MapConfig,
     "run": RunConfig,
+    "objects": ObjectsConfig,
 }
-_NOT_FOR_CORE = ("run",)
+#: sections the SLAM system does not read (the object tracker reads ``objects`` itself)
+_NOT_FOR_CORE = ("run", "objects")
 
 
 @dataclass
@@ -200,6 +196,7 @@ class Config:
     local_ba: LocalBAConfig = field(default_factory=LocalBAConfig)
     map: MapConfig = field(default_factory=MapConfig)
     run: RunConfig = field(default_factory=RunConfig)
+    objects: ObjectsConfig = field(default_factory=ObjectsConfig)
 
     def __post_init__(self) -> None:
         self.validate()

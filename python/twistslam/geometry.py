@@ -34,5 +34,7 @@ project_boxes = _g.project_boxes
 box_iou_2d = _g.box_iou_2d
 box_iou_bev = _g.box_iou_bev
 box_iou_3d = _g.box_iou_3d
+box_giou_bev = _g.box_giou_bev
+box_giou_3d = _g.box_giou_3d
 
 __all__ = [name for name in dir() if not name.startswith("_")]

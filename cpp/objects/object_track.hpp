@@ -1,0 +1,64 @@
+#pragma once
+// The object track: one state for every source that observes an object (3D detections now;
+// visual tracking of its cluster and LiDAR registration in later modules). Plain structs.
+//
+// A track holds one TrackFrame per frame from its birth to the last frame it was kept alive,
+// consecutive and without holes: frames where it was not observed hold the motion model's
+// prediction. Poses T_w_o are in the tracking frame "w": the world frame when camera poses
+// are known, otherwise each frame's own camera frame (T_w_c = I), as AB3DMOT tracks.
+// The twist xi of frame i links it to frame i + 1 (paper eq. 2, left-multiplied in w):
+//   T_w_o(i+1) = exp(Pi xi_i) T_w_o(i).
+#include <string>
+#include <vector>
+
+#include "geometry/link_projection.hpp"
+#include "geometry/types.hpp"
+
+namespace twistslam::objects {
+
+enum class TrackState {
+  kTentative,  // born, not yet observed often enough to be reported
+  kConfirmed,  // observed in the last frame and reported
+  kLost,       // confirmed once, missed in the last frame(s); predicted, may come back
+  kDead,       // missed too long: no longer associated, kept for the results
+};
+const char* to_string(TrackState state);
+
+struct TrackFrame {
+  int frame = -1;
+  Mat4 T_w_o = Mat4::Identity();  // estimate: detection, then window-smoothed
+  Vec6 xi = Vec6::Zero();         // twist to the next frame (zero for the last frame)
+  bool detected = false;          // a detection was associated in this frame
+  Mat4 T_w_o_detected = Mat4::Identity();  // that detection's box pose, heading aligned
+  Vec3 detected_size = Vec3::Zero();       // its l, w, h (m)
+  double score = 0;               // its score
+  int detection_index = -1;       // its index in the frame's detection list
+  bool reported = false;          // part of the output (set by the tracker's output policy)
+};
+
+struct ObjectTrack {
+  int id = -1;
+  int class_id = -1;
+  geometry::LinkType link = geometry::LinkType::kFree;
+  Mat6 Pi = Mat6::Identity();  // the link's projector
+  TrackState state = TrackState::kTentative;
+  std::vector<TrackFrame> frames;  // consecutive frames, birth first
+  Vec3 size = Vec3::Zero();        // l, w, h: per-dimension median of the detections (paper)
+  int hits = 0;                    // frames with an associated detection
+  int misses = 0;                  // consecutive frames without one, up to the last frame
+  int confirmed_frame = -1;        // frame at which it was confirmed (-1: never)
+
+  bool alive() const { return state != TrackState::kDead; }
+  bool ever_confirmed() const { return confirmed_frame >= 0; }
+  const TrackFrame& last() const { return frames.back(); }
+  TrackFrame& last() { return frames.back(); }
+  int first_frame() const { return frames.empty() ? -1 : frames.front().frame; }
+  // Frame row of dataset frame f, or nullptr.
+  const TrackFrame* at(int frame) const;
+  // Mean score of the associated detections (0 without any).
+  double mean_score() const;
+  // Recomputes `size` as the per-dimension median over the detected frames.
+  void update_size();
+};
+
+}  // namespace twistslam::objects

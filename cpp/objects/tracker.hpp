@@ -1,0 +1,78 @@
+#pragma once
+// 3D multi-object tracking from detections (the objects half of the paper, fed by a 3D
+// detector only): per frame, predict every live track with its twist under its mechanical
+// link (eq. 2), associate detections (Hungarian on a configurable cost, a second pass for
+// low-score detections), update the associated tracks by a sliding-window optimisation of
+// their poses (e_const, e_det, detection prior: cpp/optim/object_window.hpp), give birth to
+// new tracks and let missed ones die. The state is ObjectTrack (object_track.hpp), shared
+// with the visual and LiDAR object tracking of later modules.
+#include <vector>
+
+#include "geometry/box3d.hpp"
+#include "objects/association.hpp"
+#include "objects/object_track.hpp"
+#include "optim/object_window.hpp"
+
+namespace twistslam::objects {
+
+struct Detection {
+  geometry::Box3D box;  // in the camera frame of its frame (geometric centre, KITTI yaw)
+  double score = 0;
+  int class_id = 0;     // tracks and detections associate within a class only
+  bool planar = true;   // the class moves on the ground plane (planar link), else free
+};
+
+struct TrackerOptions {
+  AssociationMetric metric = AssociationMetric::kGiou3d;
+  double max_cost = 1.2;              // first pass gate, in the metric's unit (GIoU > -0.2)
+  bool second_pass = true;            // low-score detections against unmatched tracks
+  double second_pass_max_cost = 1.0;  // its gate (GIoU > 0: overlap required)
+  double high_score = 0.0;            // detections >= this take part in pass 1 and births
+  double low_score = -1e9;            // detections >= this (and < high) in pass 2 only
+  double birth_score = 0.0;           // an unmatched detection >= this starts a track
+  int birth_hits = 3;                 // detections before a track is confirmed (K)
+  int max_misses = 2;                 // consecutive misses a confirmed track survives (M)
+  int tentative_max_misses = 0;       // consecutive misses a tentative track survives
+  Vec3 ground_normal = Vec3(0, -1, 0);  // planar link normal in the tracking frame (up)
+  bool optimize = true;               // sliding-window optimisation after each association
+  int window = 10;                    // frames in the window
+  optim::ObjectWindowOptions window_options;
+  bool report_tentative_frames = true;  // once confirmed, its earlier frames are reported
+  int max_reported_gap = 3;           // missed frames inside a track reported (smoothed)
+};
+
+class Tracker {
+ public:
+  explicit Tracker(const TrackerOptions& options);
+
+  // Processes one frame. `frame` must increase from call to call (skipped frames are
+  // predicted). T_w_c: the camera pose in the tracking frame (identity to track in the
+  // camera frame). std::invalid_argument for a frame out of order, a non-finite pose or a
+  // detection with a non-finite value or a non-positive size.
+  void step(int frame, const Mat4& T_w_c, const std::vector<Detection>& detections);
+
+  // Every track ever born, dead ones included, with `reported` flags set by the output
+  // policy (report_tentative_frames, max_reported_gap).
+  const std::vector<ObjectTrack>& tracks();
+  int num_live() const;
+  int last_frame() const { return last_frame_; }
+  const TrackerOptions& options() const { return options_; }
+
+ private:
+  void predict_all(int frame);
+  void update_track(ObjectTrack& track, const Mat4& T_w_detected, const Detection& det, int index);
+  void miss_track(ObjectTrack& track);
+  void optimize_window(ObjectTrack& track);
+  void birth(int frame, const Mat4& T_w_detected, const Detection& det, int index);
+  void set_reported_flags();
+
+  TrackerOptions options_;
+  std::vector<ObjectTrack> tracks_;
+  int next_id_ = 0;
+  int last_frame_ = -1;
+};
+
+// Box of size l, w, h at a pose T_w_o whose y axis is vertical (yaw about y).
+geometry::Box3D box_at(const Mat4& T_w_o, const Vec3& size);
+
+}  // namespace twistslam::objects
