@@ -1,7 +1,8 @@
-"""Dataset readers and writers: KITTI tracking sequences, labels, detections, poses, oxts.
+"""Dataset readers and writers: KITTI tracking sequences, KITTI object frames, labels,
+detections, poses, oxts.
 
 Every reader returns numpy arrays or :class:`ObjectTable`; every sequence yields
-:class:`Frame` objects in the frames of DESIGN.md (rectified reference camera ``c``).
+:class:`Frame` objects in the frames of docs/design.md (rectified reference camera ``c``).
 """
 
 from .calibration import Calibration, read_calibration, write_calibration
@@ -9,6 +10,7 @@ from .data_root import DATA_ENV, data_path, data_root
 from .detections import DETECTION_CLASSES, read_detections
 from .frame import Frame, Sequence
 from .kitti_tracking import KittiTracking
+from .kitti_object import KittiObject, read_object_labels
 from .labels import read_labels, read_tracking_results, write_labels, write_tracking_results
 from .objects import DONT_CARE, ObjectTable
 from .oxts import (
@@ -31,6 +33,7 @@ __all__ = [
     "DONT_CARE",
     "Calibration",
     "Frame",
+    "KittiObject",
     "KittiTracking",
     "MissingDataWarning",
     "ObjectTable",
@@ -48,6 +51,7 @@ __all__ = [
     "read_detections",
     "read_image",
     "read_labels",
+    "read_object_labels",
     "read_oxts",
     "read_oxts_poses",
     "read_poses",
