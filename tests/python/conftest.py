@@ -4,6 +4,12 @@ Real KITTI data is found through :func:`twistslam.datasets.data_root` (``$TWISTS
 default ``shared/data`` beside the repository). Without it a real-data test skips with one
 line naming the variable -- unless ``TWISTSLAM_REQUIRE_DATA=1`` (set by ``.ci/run``), which
 turns the skip into a failure so that CI always runs them.
+
+The paper's tables (``tables.json``, the published numbers printed beside ours by
+``twistslam eval --paper``) are not KITTI data and not part of the repository either:
+:func:`paper_tables` finds them through ``$TWISTSLAM_PAPER_TABLES``, else at
+``paper/tables.json`` beside the data folder (``shared/paper`` on the development machines),
+and skips or fails the same way.
 """
 
 from __future__ import annotations
@@ -16,6 +22,13 @@ import pytest
 from twistslam.datasets.data_root import DATA_ENV, data_root
 
 REQUIRE_ENV = "TWISTSLAM_REQUIRE_DATA"
+PAPER_ENV = "TWISTSLAM_PAPER_TABLES"
+
+
+def _missing(message: str):
+    if os.environ.get(REQUIRE_ENV, "") not in ("", "0"):
+        pytest.fail(message + f"; {REQUIRE_ENV} is set, so this is a failure", pytrace=False)
+    pytest.skip(message, allow_module_level=True)
 
 
 def require_real_data(*parts: str) -> Path:
@@ -24,10 +37,17 @@ def require_real_data(*parts: str) -> Path:
     path = data_root().joinpath(*parts)
     if path.exists():
         return path
-    message = f"real KITTI data not found: {path} (set {DATA_ENV})"
-    if os.environ.get(REQUIRE_ENV, "") not in ("", "0"):
-        pytest.fail(message + f"; {REQUIRE_ENV} is set, so this is a failure", pytrace=False)
-    pytest.skip(message, allow_module_level=True)
+    _missing(f"real KITTI data not found: {path} (set {DATA_ENV})")
+
+
+def paper_tables() -> Path:
+    """The paper's ``tables.json``: ``$TWISTSLAM_PAPER_TABLES``, else ``paper/tables.json``
+    beside the data folder; skips (or fails under TWISTSLAM_REQUIRE_DATA=1) when missing."""
+    value = os.environ.get(PAPER_ENV, "").strip()
+    path = Path(value).expanduser() if value else data_root().parent / "paper" / "tables.json"
+    if path.is_file():
+        return path
+    _missing(f"the paper's tables.json not found: {path} (set {PAPER_ENV})")
 
 
 @pytest.fixture(scope="session")

@@ -1,6 +1,5 @@
-"""KittiTracking on a small sequence built here, and on the shared real KITTI files."""
+"""KittiTracking on a small sequence built here, and on the real KITTI tracking files."""
 
-import os
 import shutil
 import warnings
 from pathlib import Path
@@ -27,10 +26,6 @@ from twistslam.datasets import (
     write_velodyne,
 )
 
-KITTI = Path(os.environ.get("TWISTSLAM_KITTI_TRACKING", "/work/shared/data/kitti_tracking"))
-needs_kitti = pytest.mark.skipif(
-    not (KITTI / "training" / "calib" / "0001.txt").is_file(), reason=f"no KITTI data in {KITTI}"
-)
 N_FRAMES, SEQ, H, W = 5, "0003", 6, 8
 
 
@@ -256,25 +251,43 @@ def test_open_sequence(kitti_root):
         open_sequence(kitti_root / "elsewhere" / "0003")
 
 
-@needs_kitti
-def test_real_sequence_with_partial_modalities():
-    seq, caught = record_warnings(lambda: KittiTracking(KITTI, 1))
-    assert {"image_03", "velodyne"} <= {m for w in caught for m in ("image_03", "velodyne")
-                                        if m in str(w.message)}
-    assert read_calibration(KITTI / "training" / "calib" / "0001.txt") == seq.calib
+def test_real_sequence_with_partial_modalities(kitti_tracking):
+    """The kitti_tracking folder: labels, calibration and oxts of 0001 and a few (or, in a
+    full download, all) left images; frames without an image get None and one warning."""
+    seq, caught = record_warnings(lambda: KittiTracking(kitti_tracking, 1))
+    missing = {m for m in ("image_03", "velodyne")
+               if not (kitti_tracking / "training" / m / "0001").is_dir()}
+    assert missing <= {m for w in caught for m in missing if m in str(w.message)}
+    assert read_calibration(kitti_tracking / "training" / "calib" / "0001.txt") == seq.calib
     assert seq.gt_objects is not None and len(seq.gt_objects) == 4271
     assert len(seq) == int(seq.gt_objects.frame.max()) + 1 == 447
-    assert seq.gt_poses is None
+    # oxts/0001.txt: one rigid camera pose per frame, the world is the first camera frame
+    assert seq.gt_poses is not None and seq.gt_poses.shape == (447, 4, 4)
+    np.testing.assert_allclose(seq.gt_poses[0], np.eye(4), atol=1e-9)
+    R = seq.gt_poses[:, :3, :3]
+    np.testing.assert_allclose(R @ R.transpose(0, 2, 1), np.broadcast_to(np.eye(3), R.shape),
+                               atol=1e-6)
 
     def load():
         return [seq[i] for i in range(0, 25)]
 
     frames, caught = record_warnings(load)
+    on_disk = sorted(int(p.stem) for p in (kitti_tracking / "training" / "image_02" / "0001")
+                     .glob("*.png") if int(p.stem) < 25)
+    assert {10, 15, 20} <= set(on_disk)
     image_warnings = [w for w in caught if "image_02" in str(w.message)]
-    assert len(image_warnings) == 1 and "000000.png" in str(image_warnings[0].message)
-    with_images = [f.index for f in frames if f.image_left is not None]
-    assert with_images == [10, 15, 20]
+    first_missing = next((i for i in range(25) if i not in on_disk), None)
+    if first_missing is None:
+        assert not image_warnings
+    else:
+        assert len(image_warnings) == 1
+        assert f"{first_missing:06d}.png" in str(image_warnings[0].message)
+    assert [f.index for f in frames if f.image_left is not None] == on_disk
     assert frames[10].image_left.shape == (375, 1242, 3)
-    assert all(f.points_c is None and f.image_right is None and f.T_w_c_gt is None
-               for f in frames)
+    assert all(f.T_w_c_gt is not None for f in frames)
+    np.testing.assert_array_equal(frames[10].T_w_c_gt, seq.gt_poses[10])
+    if "velodyne" in missing:
+        assert all(f.points_c is None for f in frames)
+    if "image_03" in missing:
+        assert all(f.image_right is None for f in frames)
     assert len(frames[10].objects_gt) == np.sum(seq.gt_objects.frame == 10) > 0

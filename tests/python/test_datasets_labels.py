@@ -1,11 +1,9 @@
 """Labels, tracking results and detections against the real KITTI tracking files."""
 
-import os
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from twistslam import geometry
 from twistslam.datasets import (
     DONT_CARE,
     ObjectTable,
@@ -17,12 +15,20 @@ from twistslam.datasets import (
     write_tracking_results,
 )
 
-KITTI = Path(os.environ.get("TWISTSLAM_KITTI_TRACKING", "/work/shared/data/kitti_tracking"))
-LABELS = KITTI / "training" / "label_02" / "0001.txt"
-DETECTIONS = KITTI / "detections" / "pointrcnn_car_val" / "0001.txt"
-needs_kitti = pytest.mark.skipif(not LABELS.is_file(), reason=f"no KITTI tracking data in {KITTI}")
 COLUMNS = ("frame", "track_id", "cls", "truncation", "occlusion", "alpha", "box_2d", "box_3d",
            "score")
+
+
+@pytest.fixture
+def labels_file(kitti_tracking):
+    """Real ground truth of sequence 0001 (447 frames)."""
+    return kitti_tracking / "training" / "label_02" / "0001.txt"
+
+
+@pytest.fixture
+def detections_file(kitti_tracking):
+    """Real PointRCNN car detections of sequence 0001."""
+    return kitti_tracking / "detections" / "pointrcnn_car_val" / "0001.txt"
 
 
 def box_corners(boxes: np.ndarray) -> np.ndarray:
@@ -46,11 +52,10 @@ def assert_tables_equal(a: ObjectTable, b: ObjectTable) -> None:
             np.testing.assert_allclose(x, y, rtol=1e-6, atol=1e-9, err_msg=name)
 
 
-@needs_kitti
-def test_real_labels_read_with_geometric_centre():
-    table = read_labels(LABELS)
-    assert len(table) == sum(1 for line in LABELS.read_text().splitlines() if line.strip())
-    first_car = LABELS.read_text().splitlines()
+def test_real_labels_read_with_geometric_centre(labels_file):
+    table = read_labels(labels_file)
+    assert len(table) == sum(1 for line in labels_file.read_text().splitlines() if line.strip())
+    first_car = labels_file.read_text().splitlines()
     first_car = next(line.split() for line in first_car if line.split()[2] == "Car")
     h, y = float(first_car[10]), float(first_car[14])
     row = np.flatnonzero(table.cls == "Car")[0]
@@ -64,13 +69,12 @@ def test_real_labels_read_with_geometric_centre():
     np.testing.assert_array_equal(table.box_3d[dont_care][:, 3:6], -1000.0)  # placeholders kept
 
 
-@needs_kitti
 @pytest.mark.parametrize("frame", [10, 15, 20])
-def test_projected_3d_boxes_match_2d_labels(frame):
-    calib = read_calibration(KITTI / "training" / "calib" / "0001.txt")
-    image = read_image(KITTI / "training" / "image_02" / "0001" / f"{frame:06d}.png")
+def test_projected_3d_boxes_match_2d_labels(frame, labels_file, kitti_tracking):
+    calib = read_calibration(kitti_tracking / "training" / "calib" / "0001.txt")
+    image = read_image(kitti_tracking / "training" / "image_02" / "0001" / f"{frame:06d}.png")
     assert image.shape == (375, 1242, 3) and image.dtype == np.uint8
-    table = read_labels(LABELS).in_frame(frame)
+    table = read_labels(labels_file).in_frame(frame)
     table = table.select((table.cls != DONT_CARE) & (table.truncation < 0.1))
     assert len(table) >= 3
     corners = box_corners(table.box_3d)
@@ -86,14 +90,13 @@ def test_projected_3d_boxes_match_2d_labels(frame):
     assert np.all(error < 8.0), error
 
 
-@needs_kitti
-def test_labels_write_read_round_trip(tmp_path):
-    table = read_labels(LABELS)
+def test_labels_write_read_round_trip(tmp_path, labels_file):
+    table = read_labels(labels_file)
     write_tracking_results(tmp_path / "0001.txt", table)
     lines = (tmp_path / "0001.txt").read_text().splitlines()
     assert all(len(line.split()) == 18 for line in lines)
     # DontCare placeholders and bottom-centre y come back exactly as KITTI wrote them
-    original = LABELS.read_text().splitlines()
+    original = labels_file.read_text().splitlines()
     assert lines[0].split()[:17] == original[0].split()
     again = read_tracking_results(tmp_path / "0001.txt")
     assert_tables_equal(table, again)
@@ -134,20 +137,19 @@ def test_empty_label_file(tmp_path):
     assert len(read_labels(tmp_path / "empty.txt")) == 0
 
 
-@needs_kitti
-def test_pointrcnn_detections():
-    table = read_detections(DETECTIONS)
+def test_pointrcnn_detections(labels_file, detections_file):
+    table = read_detections(detections_file)
     assert len(table) == 4418
     assert set(table.cls) == {"Car"}
     assert np.all(table.track_id == -1)
-    first = DETECTIONS.read_text().splitlines()[0].split(",")
+    first = detections_file.read_text().splitlines()[0].split(",")
     h, y = float(first[7]), float(first[11])
     assert table.frame[0] == 0 and table.score[0] == pytest.approx(float(first[6]))
     assert table.box_3d[0, 1] == pytest.approx(y - h / 2)
     np.testing.assert_allclose(table.box_3d[0, 3:6], [float(first[9]), float(first[8]), h])
     assert table.alpha[0] == pytest.approx(float(first[14]))
     # detections sit where the labelled cars are: most labelled cars have a detection < 2 m
-    labels = read_labels(LABELS).of_class("Car")
+    labels = read_labels(labels_file).of_class("Car")
     near = []
     for frame in (10, 15, 20):
         gt, det = labels.in_frame(frame), table.in_frame(frame)
@@ -167,12 +169,10 @@ def test_malformed_detection_line(tmp_path):
         read_detections(path)
 
 
-@needs_kitti
-def test_labels_agree_with_the_geometry_module():
+def test_labels_agree_with_the_geometry_module(labels_file, kitti_tracking):
     """Boxes read here follow the box convention of twistslam.geometry (same 2D projections)."""
-    geometry = pytest.importorskip("twistslam.geometry", exc_type=ImportError)
-    calib = read_calibration(KITTI / "training" / "calib" / "0001.txt")
-    table = read_labels(LABELS).in_frame(15)
+    calib = read_calibration(kitti_tracking / "training" / "calib" / "0001.txt")
+    table = read_labels(labels_file).in_frame(15)
     table = table.select((table.cls != DONT_CARE) & (table.truncation < 0.1))
     projected = geometry.project_boxes(table.box_3d, calib.P2, 1242, 375)
     assert np.abs(projected - table.box_2d).max() < 8.0

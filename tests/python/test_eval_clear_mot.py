@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import motmetrics as mm
 import numpy as np
 import pytest
 
@@ -9,9 +10,6 @@ from twistslam.datasets.objects import ObjectTable
 from twistslam.eval.clear_mot import clear_mot, count_switches
 from twistslam.eval.difficulty import DIFFICULTIES, Difficulty
 from twistslam.eval.matching import assign, iou_function, match_sequence
-
-pytest.importorskip("twistslam.geometry")
-mm = pytest.importorskip("motmetrics")
 
 #: no difficulty filtering, so that the devkit's ignore rules and motmetrics coincide
 EVERYTHING = Difficulty("everything", min_height=0.0, max_occlusion=3, max_truncation=1.0)

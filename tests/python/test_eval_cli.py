@@ -16,11 +16,10 @@ from twistslam.eval.camera import evaluate_camera
 from twistslam.eval.results import ResultsNotFoundError
 from twistslam.eval.sequence import evaluate_sequence
 
-pytest.importorskip("twistslam.geometry")
+from conftest import require_real_data
 
-ROOT = Path("/work/shared/data/kitti_tracking")
-LABEL = ROOT / "training" / "label_02" / "0001.txt"
-pytestmark = pytest.mark.skipif(not LABEL.is_file(), reason="shared KITTI labels not present")
+ROOT = require_real_data("kitti_tracking")
+LABEL = require_real_data("kitti_tracking", "training", "label_02", "0001.txt")
 
 MOT_KEYS = {"mota", "motp", "idsw", "frag", "fp", "fn", "mt", "ml"}
 OBJECT_KEYS = {"ate", "rpe_t", "rpe_r", "tp_2d", "motp_2d", "tp_bv", "motp_bv", "tp_3d", "motp_3d"}

@@ -8,15 +8,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from twistslam import geometry
 from twistslam.datasets import ObjectTable, read_labels, write_tracking_results
 from twistslam.eval.difficulty import DIFFICULTIES
 from twistslam.eval.sequence import evaluate_sequence, open_dataset
 
-pytest.importorskip("twistslam.geometry")
+from conftest import require_real_data
 
-ROOT = Path("/work/shared/data/kitti_tracking")
-LABELS = ROOT / "training" / "label_02"
-pytestmark = pytest.mark.skipif(not LABELS.is_dir(), reason="shared KITTI labels not present")
+ROOT = require_real_data("kitti_tracking")
+LABELS = require_real_data("kitti_tracking", "training", "label_02")
 SEQS = ["0001", "0004", "0020"]
 
 
@@ -67,7 +67,6 @@ def test_hand_formula_for_an_axis_aligned_box():
     # ry = pi/2: the width lies along camera x, so a sideways move is along the width
     box = np.array([0, 0, 10, 4.0, 1.6, 1.5, np.pi / 2])
     assert hand_iou_of_shift(box, 0.5) == pytest.approx((1.6 - 0.5) / (1.6 + 0.5))
-    geometry = pytest.importorskip("twistslam.geometry")
     moved = box + [0.5, 0, 0, 0, 0, 0, 0]
     assert geometry.box_iou_bev(box[None], moved[None])[0, 0] == pytest.approx(1.1 / 2.1)
     assert geometry.box_iou_3d(box[None], moved[None])[0, 0] == pytest.approx(1.1 / 2.1)
@@ -167,7 +166,6 @@ def test_no_ground_truth_poses_warns_once_and_uses_camera_frame(tmp_path):
 
 def test_results_without_image_boxes_are_projected(tmp_path):
     """Rows with ``-1`` image boxes get their 3D box projected through P2 (the paper's 2D)."""
-    geometry = pytest.importorskip("twistslam.geometry")
     gt = read_labels(LABELS / "0001.txt")
     no_2d = read_labels(LABELS / "0001.txt")
     no_2d.box_2d[:] = -1

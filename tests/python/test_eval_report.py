@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import json
 import warnings
-from pathlib import Path
 
 import numpy as np
-import pytest
 
 from twistslam.datasets import read_labels, write_tracking_results
 from twistslam.eval.camera import CameraMetrics
@@ -15,8 +13,7 @@ from twistslam.eval.metrics import EvalSettings, SequenceMetrics
 from twistslam.eval.report import load_paper_tables, render_markdown, render_text
 from twistslam.eval.sequence import evaluate_sequence
 
-ROOT = Path("/work/shared/data/kitti_tracking")
-TABLES = Path("/work/shared/paper/tables.json")
+from conftest import paper_tables
 
 
 def camera_only(seq: str) -> SequenceMetrics:
@@ -32,9 +29,7 @@ def test_camera_table_with_and_without_paper():
     assert row.split()[1:] == ["ours", "0.041", "0.032", "0.050", "0.040", "0.900"]
     assert "ORB-SLAM2" not in text  # the paper is only read when asked for
 
-    if not TABLES.is_file():
-        pytest.skip("paper tables not present")
-    paper = load_paper_tables(TABLES)
+    paper = load_paper_tables(paper_tables())
     text = render_text(camera_only("0004"), paper)
     rows = {" ".join(line.split()[:-5]): line.split()[-5:] for line in text.splitlines()[4:-1]}
     for system, seqs in paper["camera"].items():
@@ -45,16 +40,14 @@ def test_camera_table_with_and_without_paper():
     assert "ORB-SLAM2" not in render_text(camera_only("0001"), paper)
 
 
-@pytest.mark.skipif(not TABLES.is_file() or not (ROOT / "training/label_02/0003.txt").is_file(),
-                    reason="shared data not present")
-def test_object_tables_print_the_paper_rows_of_the_same_object(tmp_path):
-    pytest.importorskip("twistslam.geometry")
+def test_object_tables_print_the_paper_rows_of_the_same_object(tmp_path, kitti_tracking):
+    ROOT = kitti_tracking
     gt = read_labels(ROOT / "training" / "label_02" / "0003.txt")
     write_tracking_results(tmp_path / "tracking" / "0003.txt", gt)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         m = evaluate_sequence(ROOT, tmp_path, "0003")
-    paper = load_paper_tables(TABLES)
+    paper = load_paper_tables(paper_tables())
     text = render_text(m, paper)
     lines = text.splitlines()
     i = lines.index(next(line for line in lines if line.startswith("03 / 1 / car")))

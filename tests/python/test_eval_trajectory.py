@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import copy
 
+import evo.core.metrics as evo_metrics
 import numpy as np
 import pytest
+from evo.core.trajectory import PosePath3D
 from scipy.spatial.transform import Rotation
 
+from twistslam import geometry
 from twistslam.eval.camera import evaluate_camera
 from twistslam.eval.object_poses import box_poses, track_pose_errors, world_poses
 from twistslam.eval.trajectory import umeyama_alignment
-
-evo_metrics = pytest.importorskip("evo.core.metrics")
-from evo.core.trajectory import PosePath3D  # noqa: E402
 
 
 def random_walk(rng: np.random.Generator, n: int, step: float = 1.0, turn: float = 0.05):
@@ -193,7 +193,6 @@ def test_parked_object_has_no_rpe_per_metre():
 
 
 def test_box_pose_matches_geometry_corners():
-    geometry = pytest.importorskip("twistslam.geometry")
     boxes = np.array([[1.0, 1.5, 12.0, 4.0, 1.6, 1.4, 0.7], [-3.0, 1.0, 20.0, 3.5, 1.8, 1.5, -2.1]])
     T = box_poses(boxes)
     l, w, h = boxes[:, 3:4], boxes[:, 4:5], boxes[:, 5:6]
