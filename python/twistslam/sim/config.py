@@ -9,13 +9,10 @@ from __future__ import annotations
 
 import typing
 from dataclasses import dataclass, field, fields, is_dataclass, replace
-from pathlib import Path
 from typing import Any
 
 from .._settings import coerce
 
-#: the KITTI calibration used when none is given (KITTI tracking training sequence 0000)
-DEFAULT_CALIB = Path(__file__).resolve().parents[3].parent / "shared/data/kitti_tracking/training/calib/0000.txt"
 
 
 @dataclass

@@ -1,6 +1,6 @@
 """Motion of every agent: intelligent-driver-model car following along routes, then poses.
 
-Cars move on the road surface (planar motion along the local road plane, DESIGN.md's
+Cars move on the road surface (planar motion along the local road plane, docs/design.md's
 mechanical link) unless ``TrafficConfig.nonplanar`` adds a small roll/pitch/heave.
 """
 

@@ -5,9 +5,6 @@ seed gives the same world whatever is rendered or written."""
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import numpy as np
 
 from twistslam.datasets import Calibration, read_calibration
@@ -15,7 +12,7 @@ from twistslam.datasets import Calibration, read_calibration
 from .buildings import build_static
 from .car_material import car_row
 from .car_mesh import CarShape, car_vehicle_mesh, vehicle_to_object
-from .config import DEFAULT_CALIB, SimConfig
+from .config import SimConfig
 from .mesh import Mesh
 from .motion import simulate
 from .person_mesh import person_mesh
@@ -31,8 +28,11 @@ RENDER_RADIUS = 130.0  # m; objects farther from the ego car are not put in the 
 CAMERA_AHEAD = 0.3  # m; reference camera ahead of the ego car's centre
 # rotation taking camera-frame vectors (x right, y down, z fwd) into the vehicle frame
 R_V_C = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
-# KITTI tracking sequence 0000's calibration, used when the shared data is not available
-_FALLBACK_CALIB = dict(
+# KITTI tracking training sequence 0000's calibration (calib/0000.txt, every digit), the
+# default: built in, so that a seed gives the same sequence whether or not KITTI is at hand
+DEFAULT_CALIB = dict(
+    P0=[[721.5377, 0, 609.5593, 0], [0, 721.5377, 172.854, 0], [0, 0, 1, 0]],
+    P1=[[721.5377, 0, 609.5593, -387.5744], [0, 721.5377, 172.854, 0], [0, 0, 1, 0]],
     P2=[[721.5377, 0, 609.5593, 44.85728], [0, 721.5377, 172.854, 0.2163791], [0, 0, 1, 0.002745884]],
     P3=[[721.5377, 0, 609.5593, -339.5242], [0, 721.5377, 172.854, 2.199936], [0, 0, 1, 0.002729905]],
     R_rect=[[0.9999239, 0.00983776, -0.007445048], [-0.009869795, 0.9999421, -0.004278459],
@@ -56,13 +56,7 @@ def load_calibration(path: str | None, width: int, height: int) -> Calibration:
     """KITTI calibration from ``path`` (default: tracking sequence 0000), with P0..P3 scaled
     from 1242x375 to ``width x height`` (pixel centres kept at pixel centres)."""
     if path is None:
-        env = os.environ.get("TWISTSLAM_KITTI_TRACKING")
-        candidate = Path(env) / "training/calib/0000.txt" if env else DEFAULT_CALIB
-        path = str(candidate) if candidate.is_file() else None
-    if path is None:
-        P = np.array(_FALLBACK_CALIB["P2"])
-        calib = Calibration(P0=P, P1=P, P2=P, P3=np.array(_FALLBACK_CALIB["P3"]), R_rect=_FALLBACK_CALIB["R_rect"],
-                            Tr_velo_cam=_FALLBACK_CALIB["Tr_velo_cam"], Tr_imu_velo=_FALLBACK_CALIB["Tr_imu_velo"],
+        calib = Calibration(**{k: np.array(v, dtype=np.float64) for k, v in DEFAULT_CALIB.items()},
                             source="KITTI tracking 0000 (built in)")
     else:
         calib = read_calibration(path)
@@ -112,7 +106,7 @@ class World:
         T_v_c[:3, :3] = R_V_C
         T_v_c[:3, 3] = [CAMERA_AHEAD, 0.0, cam.camera_height]
         self.T_m_c = self.traj.T_m_v[0] @ T_v_c  # (N, 4, 4) reference camera poses in the map
-        self.T_w_c = np.linalg.inv(self.T_m_c[0]) @ self.T_m_c  # DESIGN.md world = camera at frame 0
+        self.T_w_c = np.linalg.inv(self.T_m_c[0]) @ self.T_m_c  # world = camera at frame 0 (docs/design.md)
         self._build_object_meshes()
         # objects that never move (parked cars) join the static scene, built once
         parked = [i for i in np.flatnonzero(self.near.any(axis=1) & ~self.moving) if self.meshes[i] is not None]
