@@ -1,6 +1,6 @@
 """The per-frame record every dataset yields, and the protocol every sequence follows.
 
-Conventions (DESIGN.md): ``points_c`` are in the rectified reference camera frame ``c``
+Conventions (docs/design.md): ``points_c`` are in the rectified reference camera frame ``c``
 (x right, y down, z forward), ``T_w_c_gt`` maps camera points into the world (= camera frame
 of frame 0), boxes in ``objects_gt`` follow :mod:`twistslam.datasets.objects`.
 """

@@ -194,7 +194,7 @@ class KittiTracking:
         points_velo = points_c = None
         if velo is not None:
             points_velo = read_velodyne(velo)
-            # X_c = R_rect Tr_velo_cam X_velo (DESIGN.md); intensity carried along
+            # X_c = R_rect Tr_velo_cam X_velo (docs/design.md); intensity carried along
             T = self.calib.T_c_velo
             xyz = points_velo[:, :3].astype(np.float64) @ T[:3, :3].T + T[:3, 3]
             points_c = np.hstack([xyz, points_velo[:, 3:4]]).astype(np.float32)

@@ -4,7 +4,7 @@ One row per (frame, object). Every reader in :mod:`twistslam.datasets` returns t
 every writer takes it, so labels, detector output and our own tracking results are compared
 by the evaluator without conversion.
 
-Box convention (DESIGN.md): ``box_3d`` rows are ``[cx, cy, cz, l, w, h, ry]`` in the
+Box convention (docs/design.md): ``box_3d`` rows are ``[cx, cy, cz, l, w, h, ry]`` in the
 rectified reference camera frame ``c`` (x right, y down, z forward). ``(cx, cy, cz)`` is the
 *geometric centre* of the box, not KITTI's bottom centre: ``cy = y_kitti - h / 2``. ``ry`` is
 KITTI's ``rotation_y`` (radians, about the camera y axis); the object x axis (length) points

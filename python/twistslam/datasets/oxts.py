@@ -3,8 +3,8 @@
 Each line holds 30 numbers: ``lat lon alt roll pitch yaw vn ve vf vl vu ax ay az af al au
 wx wy wz wf wl wu pos_accuracy vel_accuracy navstat numsats posmode velmode orimode``.
 The devkit turns the first six into IMU poses ``T_m_imu`` in a local Mercator frame ``m``
-(x east, y north, z up, scale fixed by the latitude of the first line). DESIGN.md wants camera
-poses in the rectified camera frame of frame 0:
+(x east, y north, z up, scale fixed by the latitude of the first line). docs/design.md wants
+camera poses in the rectified camera frame of frame 0:
 ``T_w_c(i) = T_c_imu @ inv(T_m_imu(0)) @ T_m_imu(i) @ inv(T_c_imu)``.
 """
 
