@@ -1,7 +1,9 @@
 """``make demo``: the main job end to end on a synthetic sequence with exact ground truth.
 
 1. Generate the simulator's default ``urban`` sequence (100 frames, seed 0) once into a cache
-   (``.cache/sim/urban-seed0-n100``; reused when complete, so later demos start at once).
+   (``.cache/sim/urban-seed0-n100``; reused when complete and made by the same simulator --
+   same configuration, same code -- so later demos start at once and a changed simulator
+   regenerates it).
 2. Run stereo SLAM on it (:func:`twistslam.run`).
 3. Evaluate the camera trajectory against the exact ground truth and print the summary table.
 
@@ -12,6 +14,8 @@ Writes ``OUT/results/`` (camera_poses.txt, timings.json, config.yaml, status.txt
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import hashlib
 import json
 import shutil
 import sys
@@ -30,25 +34,65 @@ MARKER = "demo_sequence.json"
 MOVABLE_CLASSES = [24, 25, 26, 27, 28, 29, 30, 31, 32, 33]
 
 
+def _digest(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()[:16]
+
+
+def sim_code_version(folder: Path | None = None) -> str:
+    """Short hash of the simulator's source files (``twistslam/sim/*.py``, names and
+    contents): any edit of the simulator's code changes it."""
+    folder = Path(folder) if folder is not None else Path(__file__).resolve().parent / "sim"
+    h = hashlib.sha256()
+    for path in sorted(folder.glob("*.py")):
+        h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return h.hexdigest()[:16]
+
+
+def sim_config_digest(scenario: str, frames: int, seed: int, seq: str) -> str:
+    """Short hash of the full :class:`~twistslam.sim.SimConfig` that ``generate`` builds for
+    these arguments (the scenario's settings and every default)."""
+    from .sim import scenario_config
+
+    cfg = scenario_config(scenario)
+    cfg.frames, cfg.seed, cfg.seq = int(frames), int(seed), seq
+    text = json.dumps(dataclasses.asdict(cfg), sort_keys=True, default=list)
+    return _digest(text.encode())
+
+
+def sequence_key(scenario: str = SCENARIO, frames: int = FRAMES, seed: int = SEED,
+                 seq: str = SEQ) -> dict:
+    """What a cached sequence must have been made with to be reused: the arguments, the
+    simulator's configuration and its code version (written into the sequence's marker)."""
+    return {"scenario": scenario, "frames": frames, "seed": seed, "seq": seq,
+            "sim_config": sim_config_digest(scenario, frames, seed, seq),
+            "sim_code": sim_code_version()}
+
+
 def cached_sequence(cache: Path, scenario: str = SCENARIO, frames: int = FRAMES,
                     seed: int = SEED, seq: str = SEQ, progress: bool = True) -> Path:
     """Root of the simulated sequence, generated on first use.
 
-    The sequence is written to a ``.partial`` folder and renamed when complete, so an
-    interrupted generation is never mistaken for a finished one.
+    The sequence is reused only when its marker holds the same :func:`sequence_key`: a
+    change of the simulator's configuration or code regenerates it. It is written to a
+    ``.partial`` folder and renamed when complete, so an interrupted generation is never
+    mistaken for a finished one.
     """
     from .sim import generate  # the simulator only when a sequence must be made
 
-    key = {"scenario": scenario, "frames": frames, "seed": seed, "seq": seq}
+    key = sequence_key(scenario, frames, seed, seq)
     root = cache / f"{scenario}-seed{seed}-n{frames}"
     marker = root / MARKER
-    if marker.is_file() and json.loads(marker.read_text(encoding="utf-8")) == key:
-        print(f"demo: using the cached sequence {root}")
-        return root
+    stale = False
+    if marker.is_file():
+        if json.loads(marker.read_text(encoding="utf-8")) == key:
+            print(f"demo: using the cached sequence {root}")
+            return root
+        stale = True
     partial = root.with_name(root.name + ".partial")
     shutil.rmtree(partial, ignore_errors=True)
+    why = " (the cached one was made by another simulator configuration or code)" if stale else " (once)"
     print(f"demo: generating the {scenario} sequence ({frames} frames, seed {seed}) "
-          f"into {root} (once)")
+          f"into {root}{why}")
     generate(partial, scenario=scenario, frames=frames, seed=seed, seq=seq, progress=progress)
     (partial / MARKER).write_text(json.dumps(key) + "\n", encoding="utf-8")
     shutil.rmtree(root, ignore_errors=True)
