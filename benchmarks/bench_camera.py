@@ -3,9 +3,12 @@
     .venv/bin/python benchmarks/bench_camera.py                        # cached urban-seed0-n100
     .venv/bin/python benchmarks/bench_camera.py --sweep --memory       # + ORB / BA sweep, peak RSS
     .venv/bin/python benchmarks/bench_camera.py --scenario static --frames 100
-    .venv/bin/python benchmarks/bench_camera.py --root ../shared/data/kitti_tracking --seq 0001
+    .venv/bin/python benchmarks/bench_camera.py --real                 # real KITTI 0001, 27 frames
+    .venv/bin/python benchmarks/bench_camera.py --root DIR --seq 0004     # your KITTI tracking
 
-The sequence is either an existing KITTI-layout one (``--root DIR --seq 0000``) or a simulated
+The sequence is either an existing KITTI-layout one (``--root DIR --seq 0000``; ``--real`` is
+the 27 real frames of sequence 0001 with stereo and LiDAR in the data folder,
+``$TWISTSLAM_DATA/kitti_tracking_lidar``, see :func:`twistslam.datasets.data_root`) or a simulated
 one, generated once into ``CACHE/<scenario>-seed<seed>-n<frames>`` (the cache ``make demo``
 uses; an existing complete sequence is reused).
 
@@ -52,6 +55,11 @@ SWEEP_KEYS = ("orb.num_features", "local_ba.window")
 # ----------------------------------------------------------------------------- sequence
 def resolve_sequence(args) -> tuple[Path, str, str]:
     """``(root, seq, description)``; simulates into the cache when needed."""
+    if args.real:
+        from twistslam.datasets import data_path
+
+        root = data_path("kitti_tracking_lidar")
+        return root, "0001", f"real KITTI tracking 0001, frames 0-26 ({root})"
     if args.root:
         return Path(args.root), args.seq, f"{args.root} seq {args.seq}"
     from twistslam.demo import cached_sequence
@@ -317,6 +325,8 @@ def measure_memory(root: Path, seq: str, system: str, args) -> dict:
 def parse_args(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--root", help="an existing KITTI-layout dataset root (else: simulate)")
+    parser.add_argument("--real", action="store_true",
+                        help="the real KITTI sequence 0001 of the data folder (TWISTSLAM_DATA)")
     parser.add_argument("--seq", default="0000", help="sequence (default 0000)")
     parser.add_argument("--scenario", default="urban", help="simulator scenario (without --root)")
     parser.add_argument("--frames", type=int, default=100, help="simulated frames (without --root)")

@@ -1,6 +1,6 @@
 """Timing of the evaluator on the real KITTI tracking labels (ground truth as the result).
 
-    .venv/bin/python benchmarks/bench_eval.py [--data ../shared/data/kitti_tracking]
+    .venv/bin/python benchmarks/bench_eval.py [--data DIR]   # default $TWISTSLAM_DATA/kitti_tracking
 
 Prints, per sequence, the number of labelled boxes and the median wall time of
 ``evaluate_sequence`` over repeats, and the throughput of the C++ pairwise IoUs.
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from twistslam import geometry
-from twistslam.datasets import read_labels
+from twistslam.datasets import data_root, read_labels
 from twistslam.eval.sequence import evaluate_sequence
 
 
@@ -33,10 +33,14 @@ def median_time(fn, repeats: int) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--data", default="../shared/data/kitti_tracking")
+    parser.add_argument("--data", default=str(data_root() / "kitti_tracking"),
+                        help="KITTI tracking root with training/label_02 (default: %(default)s)")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     data = Path(args.data)
+    if not (data / "training" / "label_02").is_dir():
+        raise SystemExit(f"bench_eval: no KITTI tracking labels in {data}/training/label_02 "
+                         "(give --data or set TWISTSLAM_DATA)")
     work = Path(tempfile.mkdtemp())
     print(f"{'seq':>5} {'boxes':>7} {'eval median (s)':>16}")
     try:

@@ -1,6 +1,6 @@
 """Timing of ORB extraction and stereo matching at KITTI size (1242 x 375).
 
-    .venv/bin/python benchmarks/bench_features.py [--repeats 30] [--features 2000]
+    .venv/bin/python benchmarks/bench_features.py [--repeats 30] [--features 2000] [--data DIR]
 
 Prints the median wall time (ms) of
 - ``extract_orb`` on the left and the right image (two calls, one after the other),
@@ -8,8 +8,10 @@ Prints the median wall time (ms) of
 - cv2's ORB (``cv2.ORB_create(nfeatures)``, detect + compute) on the same two images, side by
   side in the same process when opencv-python(-headless) is importable (skipped otherwise),
 on a textured synthetic pair (three fronto-parallel planes at 7, 15 and 40 m seen by KITTI
-0000's cameras 2 and 3) and, when the bundled KITTI images are found, on a real left image
-(its right image is synthesised by a 10-px shift, for timing only).
+0000's cameras 2 and 3) and, when the real KITTI images are found, on the real stereo pair of
+sequence 0001 frame 10 (``--data``, default ``$TWISTSLAM_DATA/kitti_tracking_lidar``, see
+:func:`twistslam.datasets.data_root`; a root with left images only gets a right image
+synthesised by a 10-px shift, for timing only).
 
 The tracking budget is < 50 ms per frame for features + stereo on a 2-core machine.
 """
@@ -25,6 +27,7 @@ import numpy as np
 
 from twistslam import geometry
 from twistslam import features
+from twistslam.datasets import data_root
 from twistslam.sim.planes import KITTI_P2, KITTI_P3, KITTI_SIZE, PlaneScene
 
 P2, P3, (W, H) = KITTI_P2, KITTI_P3, KITTI_SIZE
@@ -37,17 +40,21 @@ def synthetic_pair(cam):
 
 
 def real_pair(data: Path):
-    """A real KITTI left image and a copy shifted left by 10 px (timing only)."""
+    """``(name, left, right)``: the real KITTI stereo pair of 0001/000010, or its left image
+    and a copy shifted left by 10 px (timing only) when the root has no right images."""
     path = data / "training" / "image_02" / "0001" / "000010.png"
     if not path.exists():
         return None
     from PIL import Image
 
     left = np.array(Image.open(path).convert("L"))
+    right_path = data / "training" / "image_03" / "0001" / "000010.png"
+    if right_path.exists():
+        return "KITTI 0001/000010 (real stereo)", left, np.array(Image.open(right_path).convert("L"))
     right = np.empty_like(left)
     right[:, :-10] = left[:, 10:]
     right[:, -10:] = left[:, -10:]
-    return left, right
+    return "KITTI 0001/000010 (shifted right)", left, right
 
 
 def median_ms(fn, repeats: int) -> tuple[float, float]:
@@ -66,7 +73,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeats", type=int, default=30)
     parser.add_argument("--features", type=int, default=2000)
-    parser.add_argument("--data", default=str(Path(__file__).resolve().parents[2] / "shared/data/kitti_tracking"))
+    parser.add_argument("--data", default=str(data_root() / "kitti_tracking_lidar"),
+                        help="KITTI tracking root with sequence 0001 (default: %(default)s)")
     args = parser.parse_args()
     try:
         import cv2
@@ -77,7 +85,7 @@ def main() -> None:
     pairs = {"synthetic planes": synthetic_pair(cam)}
     real = real_pair(Path(args.data))
     if real is not None:
-        pairs["KITTI 0001/000010 (shifted right)"] = real
+        pairs[real[0]] = real[1:]
     n = args.features
     print(f"1242x375, {n} features, median of {args.repeats} runs, {os.cpu_count()} cores, "
           f"load average {os.getloadavg()[0]:.1f}")

@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from .datasets import ObjectTable, read_detections, write_tracking_results
+from .datasets import DATA_ENV, ObjectTable, read_detections, write_tracking_results
+from .datasets import data_root as default_data_root
 
 #: m, centre distance under which a detection continues a track (the paper's 2 m rule)
 ASSOCIATION_GATE = 2.0
@@ -68,7 +69,7 @@ def run_detection_demo(data_root: Path, out: Path, seq: str = "0001") -> dict:
           f"{len(tracks.track_ids)} tracks -> {results / 'tracking' / f'{seq}.txt'}")
 
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the bundled data has no oxts: said in the report
+        warnings.simplefilter("ignore")  # e.g. no oxts (camera-frame objects): said in the report
         metrics = evaluate_sequence(data_root, results, seq)
     print(render_text(metrics), end="")
     as_dict = metrics.to_dict()
@@ -81,13 +82,16 @@ def run_detection_demo(data_root: Path, out: Path, seq: str = "0001") -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m twistslam.detection_demo", description=__doc__.split("\n")[0])
-    parser.add_argument("--data", default="../shared/data/kitti_tracking", help="KITTI tracking root")
+    parser.add_argument("--data", default=None,
+                        help=f"KITTI tracking root (default: ${DATA_ENV}/kitti_tracking, "
+                             f"now {default_data_root() / 'kitti_tracking'})")
     parser.add_argument("--out", default="demo_out/detections", help="output directory")
     parser.add_argument("--seq", default="0001")
     args = parser.parse_args(argv)
-    data = Path(args.data)
+    data = Path(args.data) if args.data else default_data_root() / "kitti_tracking"
     if not (data / "training" / "calib").is_dir():
-        print(f"demo: no KITTI tracking data at {data} (expected {data}/training/calib)", file=sys.stderr)
+        print(f"demo: no KITTI tracking data at {data} (expected {data}/training/calib; "
+              f"give --data or set {DATA_ENV})", file=sys.stderr)
         return 2
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
