@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "optim/object_costs.hpp"
 #include "optim/pose_parameterization.hpp"
 #include "optim/reprojection_costs.hpp"
 
@@ -86,6 +87,38 @@ ceres::ResidualBlockId ProblemBuilder::add_stereo_reprojection(
                                     blocks_[point].data);
 }
 
+ceres::ResidualBlockId ProblemBuilder::add_constant_velocity(int pose_a, int pose_b, int pose_c,
+                                                             const Mat6& Pi, double sigma_t,
+                                                             double sigma_r, double huber_delta) {
+  return problem_->AddResidualBlock(make_constant_velocity_cost(Pi, sigma_t, sigma_r),
+                                    huber(huber_delta), blocks_[pose_a].data,
+                                    blocks_[pose_b].data, blocks_[pose_c].data);
+}
+
+ceres::ResidualBlockId ProblemBuilder::add_detection_twist(int pose_a, int pose_b, const Mat6& Pi,
+                                                           const Vec6& xi_d, double sigma_t,
+                                                           double sigma_r, double huber_delta,
+                                                           double information_scale) {
+  return problem_->AddResidualBlock(
+      make_detection_twist_cost(Pi, xi_d, sigma_t, sigma_r, information_scale),
+      huber(huber_delta), blocks_[pose_a].data, blocks_[pose_b].data);
+}
+
+ceres::ResidualBlockId ProblemBuilder::add_detection_pose(int pose, const Mat4& T_det,
+                                                          double sigma_t, double sigma_r,
+                                                          double huber_delta,
+                                                          double information_scale) {
+  return problem_->AddResidualBlock(
+      make_detection_pose_cost(T_det, sigma_t, sigma_r, information_scale), huber(huber_delta),
+      blocks_[pose].data);
+}
+
+ceres::ResidualBlockId ProblemBuilder::add_link(int pose_a, int pose_b, const Mat6& Pi,
+                                                double sigma_t, double sigma_r) {
+  return problem_->AddResidualBlock(make_link_cost(Pi, sigma_t, sigma_r), nullptr,
+                                    blocks_[pose_a].data, blocks_[pose_b].data);
+}
+
 ceres::ResidualBlockId ProblemBuilder::add_residual(ceres::CostFunction* cost,
                                                     ceres::LossFunction* loss,
                                                     const std::vector<int>& blocks) {
@@ -165,6 +198,10 @@ SolveSummary ProblemBuilder::solve(const SolveOptions& opt) {
   auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   for (const Block& b : blocks_) ordering->AddElementToGroup(b.data, b.eliminate ? 0 : 1);
   o.linear_solver_ordering = ordering;
+  if (opt.linear_solver_override) {
+    o.linear_solver_type = *opt.linear_solver_override;
+    o.linear_solver_ordering.reset();
+  }
 
   std::string error;
   if (!o.IsValid(&error)) {

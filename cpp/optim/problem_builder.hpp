@@ -22,6 +22,7 @@
 #include <deque>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,9 @@ struct SolveOptions {
   double initial_trust_region_radius = 10;
   double gradient_tolerance = 1e-10;
   double parameter_tolerance = 1e-8;
+  // Set: this solver (e.g. DENSE_NORMAL_CHOLESKY for the object window: a few poses, no
+  // eliminated blocks) and no Schur ordering; unset: `linear_solver` decides (the BA).
+  std::optional<ceres::LinearSolverType> linear_solver_override;
 };
 
 struct SolveSummary {
@@ -81,6 +85,26 @@ class ProblemBuilder {
                                                  const Vec2& uv, double u_right,
                                                  double inv_sigma2, double huber_delta,
                                                  double min_depth);
+
+  // Object terms of eq. 9 (object_costs.hpp) on object pose blocks T_w_o; Pi is the link's
+  // projector, sigmas are in metres / radians (per frame for twists), huber_delta in sigmas
+  // (<= 0: no loss). information_scale multiplies W^2 (a detection's confidence). Throw
+  // std::invalid_argument for a sigma <= 0.
+  //   e_const:  W Pi (log(T_c T_b^-1) - log(T_b T_a^-1))      (a, b, c consecutive frames)
+  //   e_det:    W Pi (xi_d - log(T_b T_a^-1)), xi_d = log(T_det_b T_det_a^-1) (eq. 5)
+  //   prior:    W [t - t_det; log(R_det^T R)]
+  //   e_link:   W (I - Pi) log(T_b T_a^-1), no loss: the link is a model, not a measurement
+  ceres::ResidualBlockId add_constant_velocity(int pose_a, int pose_b, int pose_c,
+                                               const Mat6& Pi, double sigma_t, double sigma_r,
+                                               double huber_delta);
+  ceres::ResidualBlockId add_detection_twist(int pose_a, int pose_b, const Mat6& Pi,
+                                             const Vec6& xi_d, double sigma_t, double sigma_r,
+                                             double huber_delta, double information_scale = 1.0);
+  ceres::ResidualBlockId add_detection_pose(int pose, const Mat4& T_det, double sigma_t,
+                                            double sigma_r, double huber_delta,
+                                            double information_scale = 1.0);
+  ceres::ResidualBlockId add_link(int pose_a, int pose_b, const Mat6& Pi, double sigma_t,
+                                  double sigma_r);
 
   // Any other residual family: takes ownership of `cost`; `loss` from huber() (or owned
   // elsewhere, never taken over).
