@@ -1,7 +1,7 @@
 """Files of a simulated sequence, in the KITTI tracking layout plus the documented extras.
 
 Per-frame files go to ``OUT/training/<folder>/SEQ/NNNNNN.<ext>``, per-sequence files to
-``OUT/training/<folder>/SEQ.txt``; oracle detections mirror the shared data's layout at
+``OUT/training/<folder>/SEQ.txt``; oracle detections mirror the real data's detections/ layout at
 ``OUT/detections/oracle/SEQ.txt``. The reuse of :mod:`twistslam.datasets` writers keeps
 calibration, poses, oxts, labels and scans byte-compatible with the reader.
 """
