@@ -65,19 +65,25 @@ inline void tangent_to_ambient(const Mat6& J_tangent, const double* pose, double
 }
 
 // xi~ = log(T_b T_a^-1) and, if Ja / Jb are given, its Jacobians in the tangents of a and b.
+// Jb = J_l^-1(xi~) B(t_b); Ja = -J_l^-1(xi~) Ad(T_b T_a^-1) B(t_a) = -Jb blockdiag(R, R),
+// R = R_b R_a^T (as Ad([R, t]) B(t_a) = B(t_b) blockdiag(R, R) for t = t_b - R t_a): one
+// SE(3) Jacobian per pair instead of two.
 inline Vec6 relative_twist_jacobians(const double* a, const double* b, Mat6* Ja, Mat6* Jb) {
   const Vec6 xi = relative_twist(a, b);
-  if (Ja || Jb) {
-    auto B = [](const double* p) {
-      Mat6 out = Mat6::Zero();
-      out.topLeftCorner<3, 3>().setIdentity();
-      out.topRightCorner<3, 3>() = 2.0 * geometry::hat(Eigen::Map<const Vec3>(p));
-      out.bottomRightCorner<3, 3>() = 2.0 * Mat3::Identity();
-      return out;
-    };
-    if (Ja) *Ja = -geometry::se3_left_jacobian_inverse(-xi) * B(a);
-    if (Jb) *Jb = geometry::se3_left_jacobian_inverse(xi) * B(b);
+  if (!Ja && !Jb) return xi;
+  const Mat6 Jl_inv = geometry::se3_left_jacobian_inverse(xi);
+  const Mat3 tb_hat = geometry::hat(Eigen::Map<const Vec3>(b));
+  Mat6 J;  // J_l^-1 [I, 2 hat(t_b); 0, 2 I]
+  J.leftCols<3>() = Jl_inv.leftCols<3>();
+  J.topRightCorner<3, 3>() =
+      2.0 * (Jl_inv.topLeftCorner<3, 3>() * tb_hat + Jl_inv.topRightCorner<3, 3>());
+  J.bottomRightCorner<3, 3>() = 2.0 * Jl_inv.bottomRightCorner<3, 3>();
+  if (Ja) {
+    const Mat3 R = (pose_quaternion(b) * pose_quaternion(a).conjugate()).toRotationMatrix();
+    Ja->leftCols<3>() = -J.leftCols<3>() * R;
+    Ja->rightCols<3>() = -J.rightCols<3>() * R;
   }
+  if (Jb) *Jb = J;
   return xi;
 }
 

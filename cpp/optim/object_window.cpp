@@ -105,16 +105,19 @@ ObjectWindowSummary optimize_object_window(std::vector<ObjectWindowFrame>& frame
       const Vec6 xi_d = geometry::twist_between(local(frames[i].T_w_o_detected),
                                                 local(frames[i + 1].T_w_o_detected));
       const double k = std::min(frames[i].detection_weight, frames[i + 1].detection_weight);
-      b.add_detection_twist(block[i], block[i + 1], Pi_local, xi_d, o.det_sigma_translation,
-                            o.det_sigma_rotation, o.huber_det, k);
+      b.gate(b.add_detection_twist(block[i], block[i + 1], Pi_local, xi_d,
+                                   o.det_sigma_translation, o.det_sigma_rotation, o.huber_det, k),
+             o.chi2_detection);
     }
   }
   // Detection prior: anchors the canonical (box) pose, which twists alone cannot (sec. III-C).
   if (o.use_prior) {
     for (int i = 0; i < n; ++i) {
       if (fixed[i] || !usable_detection(frames[i])) continue;
-      b.add_detection_pose(block[i], local(frames[i].T_w_o_detected), o.prior_sigma_translation,
-                           o.prior_sigma_rotation, o.huber_prior, frames[i].detection_weight);
+      b.gate(b.add_detection_pose(block[i], local(frames[i].T_w_o_detected),
+                                  o.prior_sigma_translation, o.prior_sigma_rotation,
+                                  o.huber_prior, frames[i].detection_weight),
+             o.chi2_detection);
     }
   }
   out.num_residuals = b.num_residuals();
@@ -124,15 +127,25 @@ ObjectWindowSummary optimize_object_window(std::vector<ObjectWindowFrame>& frame
   so.max_iterations = o.max_iterations;
   so.num_threads = 1;  // a handful of 6x6 blocks: threads cost more than they save
   // Dense normal equations of at most 6 n unknowns, no Schur (no points).
-  so.linear_solver_override = ceres::DENSE_NORMAL_CHOLESKY;
+  so.linear_solver_override = ceres::SPARSE_NORMAL_CHOLESKY;
   // Initial poses are close (detections / predictions): start near Gauss-Newton.
   so.initial_trust_region_radius = 1e4;
-  const detail::SolveSummary s = b.solve(so);
+  detail::SolveSummary s = b.solve(so);
   out.usable = s.usable;
   out.iterations = s.iterations;
   out.initial_cost = s.initial_cost;
-  out.final_cost = s.final_cost;
   if (!out.usable) return out;
+  // Huber bounds an outlier's pull but does not remove it (a 2 m outlier still moved its
+  // frame by ~0.4 m): detection terms beyond the chi2 gate go, and the window is solved again
+  // from the first pass's poses -- only when there was an outlier, so usually once.
+  if (o.chi2_detection > 0 && (out.num_outliers = b.remove_gated_outliers()) > 0 &&
+      b.num_residuals() > 0) {
+    s = b.solve(so);
+    out.usable = s.usable;
+    out.iterations += s.iterations;
+    if (!out.usable) return out;
+  }
+  out.final_cost = s.final_cost;
   for (int i = 0; i < n; ++i) {
     if (fixed[i]) continue;
     frames[i].T_w_o = b.pose(block[i]);

@@ -44,6 +44,11 @@ struct ObjectWindowOptions {
   bool use_prior = true;
   bool use_link = true;
   int max_iterations = 10;
+  // Outlier gate (as in bundle_adjust): after a first pass, each detection term (prior,
+  // e_det) whose whitened squared error exceeds this is removed and the window is solved
+  // again (only if one was removed). 12.59: 95 % of chi2 with 6 dof, the quantile the BA's
+  // gates use. <= 0: one pass, Huber only.
+  double chi2_detection = 12.59;
 };
 
 struct ObjectWindowSummary {
@@ -51,6 +56,7 @@ struct ObjectWindowSummary {
   int iterations = 0;
   double initial_cost = 0, final_cost = 0;
   int num_residuals = 0;
+  int num_outliers = 0;  // detection terms removed by the chi2 gate
 };
 
 // Refines frames[i].T_w_o in place. Pi is the link's projector (geometry/link_projection.hpp).
