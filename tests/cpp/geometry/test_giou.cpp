@@ -111,7 +111,7 @@ TEST(Giou, HandComputedAxisAlignedCases) {
 
 TEST(Giou, NegativeAndDecreasingWithDistanceWhenDisjoint) {
   const auto a = make_box(0, 1, 10, 4, 1.6, 1.5, 0.2);
-  for (const Vec3 dir : {Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(0.6, 0, -0.8), Vec3(0, 1, 0)}) {
+  for (const Vec3& dir : {Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(0.6, 0, -0.8), Vec3(0, 1, 0)}) {
     double prev_bev = 2, prev_3d = 2;
     for (double s = 5.0; s < 200; s *= 1.3) {
       auto b = make_box(0, 1, 10, 3.5, 1.7, 1.4, -0.5);

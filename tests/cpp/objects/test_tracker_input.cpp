@@ -155,7 +155,9 @@ TEST(TrackerInput, ClassesNeverMix) {
   }
   for (const auto& t : tracker.tracks()) {
     for (const auto& fr : t.frames) {
-      if (fr.detected) EXPECT_EQ(fr.frame % 2, t.class_id);
+      if (fr.detected) {
+        EXPECT_EQ(fr.frame % 2, t.class_id);
+      }
     }
     EXPECT_FALSE(t.ever_confirmed());
   }

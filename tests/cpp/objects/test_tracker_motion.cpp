@@ -161,9 +161,36 @@ TEST(TrackerMotion, MovingCameraGivesTheSameWorldTracks) {
       EXPECT_LT((fc.T_w_o_detected - fw.T_w_o_detected).norm(), 1e-9);
     }
   }
-  // And the world tracks are the world trajectories, not the camera-frame ones.
-  const ObjectTrack& ta = tw[0].first_frame() == 0 && (position(tw[0].at(0)->T_w_o) - position(a.pose(0))).norm() < 1 ? tw[0] : tw[1];
-  EXPECT_LT((position(ta.at(29)->T_w_o) - position(a.pose(29))).norm(), 0.3);
-  const ObjectTrack& tac = &ta == &tw[0] ? tc[0] : tc[1];
-  EXPECT_LT((position(tac.at(29)->T_w_o) - position(a.pose(29))).norm(), 0.3);
+  // And the world tracks are the world trajectories, not the camera-frame ones: car A is
+  // detection 0 of every frame.
+  const int k = scenes::track_with_detection(tc, 0, 0);
+  ASSERT_GE(k, 0);
+  for (int f = 0; f < 30; ++f) {
+    ASSERT_NE(tc[k].at(f), nullptr) << f;
+    EXPECT_LT((position(tc[k].at(f)->T_w_o) - position(a.pose(f))).norm(), 0.3) << f;
+  }
+}
+
+// The link restricts the motion the tracker estimates and predicts: a box sinking 0.2 m per
+// frame while driving forward keeps its height under the planar link, not under the free one.
+TEST(TrackerMotion, PlanarLinkKeepsPredictionsOnTheGround) {
+  for (const bool planar : {true, false}) {
+    SCOPED_TRACE(planar ? "planar" : "free");
+    TrackerOptions o;
+    o.optimize = false;  // the twists of the raw detections, projected on the link
+    Tracker tracker(o);
+    for (int f = 0; f < 5; ++f) {
+      Detection d = detect(scenes::pose_yaw(0.0, Vec3(f, 0.9 + 0.2 * f, 20)));
+      d.planar = planar;
+      tracker.step(f, kI, {d});
+    }
+    tracker.step(5, kI, {});
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const ObjectTrack& t = tracker.tracks()[0];
+    EXPECT_EQ(t.link, planar ? geometry::LinkType::kPlanar : geometry::LinkType::kFree);
+    const Vec3 predicted = position(t.at(5)->T_w_o);
+    EXPECT_NEAR(predicted.x(), 5.0, 1e-6);
+    EXPECT_NEAR(predicted.y(), planar ? 0.9 + 0.2 * 4 : 0.9 + 0.2 * 5, 1e-6);
+    EXPECT_NEAR(t.at(4)->xi[1], planar ? 0.0 : 0.2, 1e-9);
+  }
 }
