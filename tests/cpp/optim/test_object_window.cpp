@@ -179,6 +179,12 @@ TEST(ObjectWindow, SwitchesRemoveTheirTerms) {
   EXPECT_EQ(count(false, true, false, false), 7);
   EXPECT_EQ(count(false, false, true, false), 9);
   EXPECT_EQ(count(false, false, false, true), 9);
+  // A detection weight of 0 drops that frame's detection terms (prior and the one e_det).
+  {
+    auto frames = frames0;
+    frames[2].detection_weight = 0;
+    EXPECT_EQ(optimize_object_window(frames, Pi, {}).num_residuals, 8 + 6 + 8 + 9);
+  }
   // Nothing at all: a no-op.
   auto frames = frames0;
   const auto s = optimize_object_window(frames, Pi, [] {
