@@ -64,6 +64,28 @@ struct Car {
   }
 };
 
+// The options every scene is written for, set explicitly so that tuning the library's
+// defaults (python/twistslam/config_objects.py) does not change what the tests mean. The
+// window's own options (size, sigmas, iterations) stay the library's defaults.
+inline twistslam::objects::TrackerOptions options() {
+  twistslam::objects::TrackerOptions o;
+  o.metric = twistslam::objects::AssociationMetric::kGiou3d;
+  o.max_cost = 1.2;
+  o.second_pass = true;
+  o.second_pass_max_cost = 1.0;
+  o.high_score = 0.5;  // the scenes' detections score 0.9
+  o.low_score = 0.0;
+  o.birth_score = 0.5;
+  o.birth_hits = 3;
+  o.max_misses = 2;
+  o.tentative_max_misses = 0;
+  o.ground_normal = Vec3(0, -1, 0);
+  o.optimize = true;
+  o.report_tentative_frames = true;
+  o.max_reported_gap = 3;
+  return o;
+}
+
 // The detection of a box at pose T_c_o (upright in the camera frame).
 inline Detection detect(const Mat4& T_c_o, double score = 0.9, int class_id = 0,
                         const Vec3& size = kCarSize) {

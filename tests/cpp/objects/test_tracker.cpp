@@ -29,7 +29,7 @@ TEST(Tracker, OneCarIsBornConfirmedAndDies) {
                            Config{5, 4, false}, Config{1, 0, false}}) {
     SCOPED_TRACE(testing::Message() << "birth_hits " << cfg.birth_hits << " max_misses "
                                     << cfg.max_misses << " tentative " << cfg.tentative);
-    TrackerOptions o;
+    TrackerOptions o = scenes::options();
     o.birth_hits = cfg.birth_hits;
     o.max_misses = cfg.max_misses;
     o.report_tentative_frames = cfg.tentative;
@@ -68,7 +68,7 @@ TEST(Tracker, OneCarIsBornConfirmedAndDies) {
 }
 
 TEST(Tracker, LostFramesAreNotReportedBeforeTheObjectComesBack) {
-  TrackerOptions o;  // birth_hits 3, max_misses 2
+  TrackerOptions o = scenes::options();
   Tracker tracker(o);
   const Car car;
   for (int f = 0; f < 7; ++f) tracker.step(f, kI, {detect(car.pose(f))});
@@ -96,7 +96,7 @@ TEST(Tracker, LostFramesAreNotReportedBeforeTheObjectComesBack) {
 // detection (frame 3) without checking confirmed_frame, so the predicted frame 2 is reported
 // while the detected frames 0 and 1 around it are not.
 TEST(Tracker, NothingBeforeTheConfirmationIsReportedWhenTentativeFramesAreNot) {
-  TrackerOptions o;  // birth_hits 3
+  TrackerOptions o = scenes::options();
   o.tentative_max_misses = 1;
   o.report_tentative_frames = false;
   Tracker tracker(o);
@@ -112,7 +112,7 @@ TEST(Tracker, NothingBeforeTheConfirmationIsReportedWhenTentativeFramesAreNot) {
 }
 
 TEST(Tracker, FalsePositivesAreNeverConfirmedNorReported) {
-  Tracker tracker(TrackerOptions{});
+  Tracker tracker(scenes::options());
   const Car car;
   for (int f = 0; f < 10; ++f) {
     std::vector<Detection> dets = {detect(car.pose(f))};
@@ -149,7 +149,7 @@ TEST(Tracker, CrossingCarsKeepTheirIds) {
   for (const Setup s : {Setup{AssociationMetric::kGiou3d, 1.2}, Setup{AssociationMetric::kIouBev, 0.9},
                         Setup{AssociationMetric::kCentreDistance, 2.0}}) {
     SCOPED_TRACE(to_string(s.metric));
-    TrackerOptions o;
+    TrackerOptions o = scenes::options();
     o.metric = s.metric;
     o.max_cost = s.max_cost;
     Tracker tracker(o);
@@ -196,7 +196,7 @@ TEST(Tracker, HeadingFlipKeepsTheIdAndTheHeading) {
   for (const int flip : {1, 4, 7}) {
     for (const double extra : {0.0, 0.05}) {
       SCOPED_TRACE(testing::Message() << "flip at frame " << flip << ", extra yaw " << extra);
-      Tracker tracker(TrackerOptions{});
+      Tracker tracker(scenes::options());
       const Car car;
       for (int f = 0; f < 15; ++f) {
         Detection d = detect(car.pose(f));
@@ -222,7 +222,7 @@ TEST(Tracker, HeadingFlipKeepsTheIdAndTheHeading) {
 TEST(Tracker, SecondPassKeepsConfirmedTracksButNeverStartsOne) {
   for (const bool second_pass : {true, false}) {
     SCOPED_TRACE(second_pass ? "second pass" : "no second pass");
-    TrackerOptions o;
+    TrackerOptions o = scenes::options();
     o.high_score = 0.5;
     o.low_score = 0.2;
     o.birth_score = 0.5;
@@ -256,7 +256,7 @@ TEST(Tracker, SecondPassKeepsConfirmedTracksButNeverStartsOne) {
 }
 
 TEST(Tracker, SecondPassIgnoresTentativeTracks) {
-  TrackerOptions o;
+  TrackerOptions o = scenes::options();
   o.high_score = 0.5;
   o.low_score = 0.2;
   Tracker tracker(o);
@@ -271,7 +271,7 @@ TEST(Tracker, SecondPassIgnoresTentativeTracks) {
 
 // The track's size is the per-dimension median of its detections (robust to one outlier).
 TEST(Tracker, SizeIsThePerDimensionMedian) {
-  Tracker tracker(TrackerOptions{});
+  Tracker tracker(scenes::options());
   const Car car;
   const double lengths[] = {4.0, 4.2, 7.0, 3.9};
   const double heights[] = {1.5, 1.4, 1.6, 1.45};

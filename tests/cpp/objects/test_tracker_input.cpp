@@ -26,7 +26,7 @@ Vec3 position(const Mat4& T) { return T.block<3, 1>(0, 3); }
 }  // namespace
 
 TEST(TrackerInput, EmptyDetectionListsAreFine) {
-  Tracker tracker(TrackerOptions{});
+  Tracker tracker(scenes::options());
   for (int f = 0; f < 5; ++f) EXPECT_NO_THROW(tracker.step(f, kI, {}));
   EXPECT_TRUE(tracker.tracks().empty());
   EXPECT_EQ(tracker.num_live(), 0);
@@ -34,7 +34,7 @@ TEST(TrackerInput, EmptyDetectionListsAreFine) {
 }
 
 TEST(TrackerInput, FramesMustIncrease) {
-  Tracker tracker(TrackerOptions{});
+  Tracker tracker(scenes::options());
   const Car car;
   EXPECT_THROW(tracker.step(-1, kI, {}), std::invalid_argument);
   tracker.step(5, kI, {detect(car.pose(5))});  // the first frame need not be 0
@@ -49,7 +49,7 @@ TEST(TrackerInput, FramesMustIncrease) {
 }
 
 TEST(TrackerInput, BadBoxesThrowAndChangeNothing) {
-  Tracker tracker(TrackerOptions{});
+  Tracker tracker(scenes::options());
   const Car car;
   tracker.step(0, kI, {detect(car.pose(0))});
   std::vector<Detection> bad;
@@ -75,7 +75,7 @@ TEST(TrackerInput, BadBoxesThrowAndChangeNothing) {
 }
 
 TEST(TrackerInput, NonRigidCameraPosesThrow) {
-  Tracker tracker(TrackerOptions{});
+  Tracker tracker(scenes::options());
   const Car car;
   Mat4 scaled = kI;
   scaled.topLeftCorner<3, 3>() *= 2.0;
@@ -98,7 +98,7 @@ TEST(TrackerInput, NonRigidCameraPosesThrow) {
 }
 
 TEST(TrackerInput, BadOptionsThrow) {
-  TrackerOptions o;
+  TrackerOptions o = scenes::options();
   o.window = 1;
   EXPECT_THROW(Tracker{o}, std::invalid_argument);
   o = TrackerOptions{};
@@ -114,7 +114,7 @@ TEST(TrackerInput, BadOptionsThrow) {
 TEST(TrackerInput, SkippedFramesArePredicted) {
   for (const bool optimize : {true, false}) {
     SCOPED_TRACE(optimize ? "optimize" : "no optimisation");
-    TrackerOptions o;  // max_misses 2
+    TrackerOptions o = scenes::options();
     o.optimize = optimize;
     Tracker tracker(o);
     Car car;
@@ -146,7 +146,7 @@ TEST(TrackerInput, SkippedFramesArePredicted) {
 }
 
 TEST(TrackerInput, ClassesNeverMix) {
-  Tracker tracker(TrackerOptions{});
+  Tracker tracker(scenes::options());
   const Car car;
   for (int f = 0; f < 6; ++f) {
     Detection d = detect(car.pose(f));

@@ -80,7 +80,7 @@ Errors run_circle(TrackerOptions o, unsigned seed, double sigma_t = 0.2, double 
 TEST(TrackerMotion, WindowSmoothingBeatsTheRawDetectionsOnACircle) {
   for (const unsigned seed : {1u, 2u, 3u}) {
     SCOPED_TRACE(testing::Message() << "seed " << seed);
-    TrackerOptions o;
+    TrackerOptions o = scenes::options();
     o.optimize = true;
     o.max_misses = 3;  // survives the 3 missed frames
     o.max_reported_gap = 3;
@@ -96,7 +96,7 @@ TEST(TrackerMotion, WindowSmoothingBeatsTheRawDetectionsOnACircle) {
 }
 
 TEST(TrackerMotion, GapLongerThanMaxReportedGapIsNotReported) {
-  TrackerOptions o;
+  TrackerOptions o = scenes::options();
   o.max_misses = 3;
   o.max_reported_gap = 2;  // < the 3 missed frames
   const Errors e = run_circle(o, 1);
@@ -107,7 +107,7 @@ TEST(TrackerMotion, GapLongerThanMaxReportedGapIsNotReported) {
 // Without the window the twist comes from the last two raw detections: with 0.2 m noise its
 // prediction over the gap is too poor to associate (a new track is born), hence less noise.
 TEST(TrackerMotion, WithoutOptimisationTheTrackFollowsTheDetections) {
-  TrackerOptions o;
+  TrackerOptions o = scenes::options();
   o.optimize = false;
   o.max_misses = 3;
   const Errors e = run_circle(o, 1, 0.05, 0.5 * kDeg);
@@ -129,7 +129,7 @@ TEST(TrackerMotion, MovingCameraGivesTheSameWorldTracks) {
   const auto T_w_c = [](int f) {
     return scenes::pose_yaw(0.015 * f, Vec3(0.3 * f, 0.05 * std::sin(0.7 * f), 0.8 * f));
   };
-  Tracker in_world(TrackerOptions{}), in_camera(TrackerOptions{});
+  Tracker in_world(scenes::options()), in_camera(scenes::options());
   std::mt19937 rng(5);
   for (int f = 0; f < 30; ++f) {
     std::vector<Detection> world, camera;
@@ -176,7 +176,7 @@ TEST(TrackerMotion, MovingCameraGivesTheSameWorldTracks) {
 TEST(TrackerMotion, PlanarLinkKeepsPredictionsOnTheGround) {
   for (const bool planar : {true, false}) {
     SCOPED_TRACE(planar ? "planar" : "free");
-    TrackerOptions o;
+    TrackerOptions o = scenes::options();
     o.optimize = false;  // the twists of the raw detections, projected on the link
     Tracker tracker(o);
     for (int f = 0; f < 5; ++f) {
