@@ -225,7 +225,7 @@ TEST(Tracker, SecondPassKeepsConfirmedTracksButNeverStartsOne) {
     TrackerOptions o = scenes::options();
     o.high_score = 0.5;
     o.low_score = 0.2;
-    o.birth_score = 0.5;
+    o.birth_score = 0.0;  // births need high_score too: a weak detection never starts one
     o.second_pass = second_pass;
     Tracker tracker(o);
     const Car car;
@@ -259,6 +259,7 @@ TEST(Tracker, SecondPassIgnoresTentativeTracks) {
   TrackerOptions o = scenes::options();
   o.high_score = 0.5;
   o.low_score = 0.2;
+  o.birth_score = 0.0;
   Tracker tracker(o);
   const Car car;
   tracker.step(0, kI, {detect(car.pose(0), 0.9)});

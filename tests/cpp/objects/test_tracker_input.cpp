@@ -98,6 +98,8 @@ TEST(TrackerInput, NonRigidCameraPosesThrow) {
 }
 
 TEST(TrackerInput, BadOptionsThrow) {
+  EXPECT_NO_THROW(Tracker{TrackerOptions{}});  // the library's defaults are valid
+  EXPECT_NO_THROW(Tracker{scenes::options()});
   TrackerOptions o = scenes::options();
   o.window = 1;
   EXPECT_THROW(Tracker{o}, std::invalid_argument);
