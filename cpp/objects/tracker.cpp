@@ -210,7 +210,8 @@ void Tracker::set_reported_flags() {
       f.reported = options_.report_tentative_frames || f.frame >= t.confirmed_frame;
       // a short gap between two detections: the smoothed prediction is reported
       if (f.reported && last_detected >= 0 && k - last_detected - 1 <= options_.max_reported_gap)
-        for (int g = last_detected + 1; g < k; ++g) t.frames[g].reported = true;
+        for (int g = last_detected + 1; g < k; ++g)
+          t.frames[g].reported = options_.report_tentative_frames || t.frames[g].frame >= t.confirmed_frame;
       last_detected = k;
     }
   }

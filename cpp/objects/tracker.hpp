@@ -22,20 +22,25 @@ struct Detection {
   bool planar = true;   // the class moves on the ground plane (planar link), else free
 };
 
+// Defaults = twistslam.Config().objects (python/twistslam/config_objects.py says why each).
 struct TrackerOptions {
+  TrackerOptions() {
+    window_options.link_sigma_translation = 0.1;  // camera -y is not the road normal
+    window_options.max_iterations = 5;
+  }
   AssociationMetric metric = AssociationMetric::kGiou3d;
   double max_cost = 1.2;              // first pass gate, in the metric's unit (GIoU > -0.2)
   bool second_pass = true;            // low-score detections against unmatched tracks
   double second_pass_max_cost = 1.0;  // its gate (GIoU > 0: overlap required)
-  double high_score = 0.0;            // detections >= this take part in pass 1 and births
-  double low_score = -1e9;            // detections >= this (and < high) in pass 2 only
-  double birth_score = 0.0;           // an unmatched detection >= this starts a track
-  int birth_hits = 3;                 // detections before a track is confirmed (K)
+  double high_score = 1.0;            // detections >= this take part in pass 1 and births
+  double low_score = -1.0;            // detections >= this (and < high) in pass 2 only
+  double birth_score = 1.0;           // an unmatched detection >= this starts a track
+  int birth_hits = 2;                 // detections before a track is confirmed (K)
   int max_misses = 2;                 // consecutive misses a confirmed track survives (M)
   int tentative_max_misses = 0;       // consecutive misses a tentative track survives
   Vec3 ground_normal = Vec3(0, -1, 0);  // planar link normal in the tracking frame (up)
   bool optimize = true;               // sliding-window optimisation after each association
-  int window = 10;                    // frames in the window
+  int window = 6;                     // frames in the window
   optim::ObjectWindowOptions window_options;
   bool report_tentative_frames = true;  // once confirmed, its earlier frames are reported
   int max_reported_gap = 3;           // missed frames inside a track reported (smoothed)

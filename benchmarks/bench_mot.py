@@ -1,0 +1,184 @@
+"""3D multi-object tracking from PointRCNN detections: twistslam vs AB3DMOT, one run, one
+evaluator (the KITTI devkit protocol, Car, 3D IoU 0.25).
+
+    .venv/bin/python benchmarks/bench_mot.py [--seqs 0001 0006 0008 0010 0012] [--no-ablation]
+
+Data: ``$TWISTSLAM_DATA`` (default ``shared/data`` beside the repository): labels and
+detections in ``kitti_tracking/``, AB3DMOT's outputs in ``ab3dmot/``. Prints
+
+1. per sequence and overall, every output box (no threshold) of both, then both at their
+   score threshold (ours: ``objects.min_track_score``, chosen on these public sequences and
+   fixed; AB3DMOT: its shipped 3.240738, also chosen on the validation split): MOTA, MOTP,
+   IDSW, FRAG, FP, FN, sAMOTA, AMOTA, HOTA;
+2. an ablation row per design choice (overall, same protocol);
+3. smoothness of the tracks (RMS of the frame-to-frame change of speed and of yaw rate, in
+   each frame's camera frame, tracks of >= 10 frames), ours vs AB3DMOT's Kalman tracks vs
+   the ground-truth labels;
+4. speed: frames/s of the C++ tracker per sequence (median), peak memory (RSS). AB3DMOT
+   (Python, not installable here) is given by its published speed, marked as such.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import tempfile
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import twistslam
+from twistslam.datasets import KittiTracking, data_path, read_labels, read_tracking_results
+from twistslam.eval.mot import evaluate_mot
+
+SEQS = ["0001", "0006", "0008", "0010", "0012"]
+AB3DMOT_THRESHOLD = 3.240738  # its shipped Car threshold for PointRCNN (ab3dmot/README.md)
+AB3DMOT_PUBLISHED_HZ = 207.4  # AB3DMOT paper, KITTI, Python (not measured here)
+COLUMNS = ("mota", "motp", "idsw", "frag", "fp", "fn", "samota", "amota", "hota")
+
+ABLATIONS = {
+    "defaults": [],
+    "cost: iou_bev": ["objects.association=iou_bev", "objects.max_cost=0.99"],
+    "cost: centre_distance (2 m)": ["objects.association=centre_distance", "objects.max_cost=2.0",
+                                    "objects.second_pass_max_cost=1.0"],
+    "no second pass": ["objects.second_pass=false"],
+    "no e_const": ["objects.use_const=false"],
+    "no e_det": ["objects.use_det_twist=false"],
+    "no detection prior": ["objects.use_prior=false"],
+    "no window optimisation": ["objects.optimize=false"],
+    "free link (no planar)": ["objects.planar_classes=[]"],
+    "camera frame (no ego motion)": ["objects.frame=camera"],
+    "AB3DMOT's birth: 3 hits": ["objects.birth_hits=3"],
+}
+
+
+def track_all(root: Path, seqs: list[str], overrides: list[str], out: Path) -> list[float]:
+    """Run the tracker on every sequence, write ``out/tracking_all`` and ``out/tracking``;
+    returns frames/s per sequence."""
+    config = twistslam.Config()
+    config.override(overrides)
+    fps = []
+    for seq in seqs:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # labels-only root: no images, no scans
+            sequence = KittiTracking(root, seq)
+        result = twistslam.track_detections(sequence, root / "detections" / "pointrcnn_car_val",
+                                            config)
+        result.save(out)
+        fps.append(result.frames_per_second)
+    return fps
+
+
+def evaluate(root: Path, results: Path, seqs: list[str], min_score=None):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return evaluate_mot(root, results, seqs, protocol="kitti", min_score=min_score)
+
+
+def fmt(m) -> str:
+    d = m.to_dict()
+    out = []
+    for k in COLUMNS:
+        v = d.get(k, float("nan"))
+        out.append(f"{v:7d}" if isinstance(v, (int, np.integer)) else f"{float(v):7.2f}")
+    return " ".join(out)
+
+
+def print_table(title: str, rows: list[tuple[str, object]]) -> None:
+    print(f"\n{title}")
+    print(f"{'':34s} " + " ".join(f"{c.upper():>7s}" for c in COLUMNS))
+    for name, m in rows:
+        print(f"{name:34s} {fmt(m)}")
+
+
+def smoothness(table) -> tuple[float, float, int]:
+    """RMS frame-to-frame change of speed (m/s per frame) and yaw rate (deg/s per frame)
+    over tracks of at least 10 consecutive frames; and the number of such tracks."""
+    d_speed, d_yaw = [], []
+    n = 0
+    for tid in table.track_ids:
+        t = table.select(table.track_id == tid).sorted()
+        runs = np.split(np.arange(len(t)), np.flatnonzero(np.diff(t.frame) != 1) + 1)
+        for run in runs:
+            if len(run) < 10:
+                continue
+            c = t.box_3d[run, :3][:, [0, 2]]
+            speed = np.linalg.norm(np.diff(c, axis=0), axis=1) / 0.1
+            yaw = np.unwrap(t.box_3d[run, 6] * 2) / 2  # heading modulo pi
+            yaw_rate = np.degrees(np.diff(yaw)) / 0.1
+            d_speed.append(np.diff(speed))
+            d_yaw.append(np.diff(yaw_rate))
+            n += 1
+    rms = lambda parts: float(np.sqrt(np.mean(np.concatenate(parts) ** 2))) if parts else float("nan")  # noqa: E731
+    return rms(d_speed), rms(d_yaw), n
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--seqs", nargs="+", default=SEQS)
+    parser.add_argument("--no-ablation", action="store_true")
+    args = parser.parse_args()
+    root = data_path("kitti_tracking")
+    ab3dmot = data_path("ab3dmot")
+    threshold = twistslam.Config().objects.min_track_score
+    print(f"load average {os.getloadavg()[0]:.2f}; protocol kitti (devkit), Car, 3D IoU 0.25")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        ours = Path(tmp) / "ours"
+        fps = track_all(root, args.seqs, [], ours)
+        all_boxes = Path(tmp) / "ours_all"
+        (all_boxes / "tracking").mkdir(parents=True)
+        for seq in args.seqs:  # every box, no threshold: tracking_all/ as tracking/
+            (all_boxes / "tracking" / f"{seq}.txt").write_bytes(
+                (ours / "tracking_all" / f"{seq}.txt").read_bytes())
+        runs = {
+            "twistslam, every box": evaluate(root, all_boxes, args.seqs),
+            "AB3DMOT raw, every box": evaluate(root, ab3dmot / "raw", args.seqs),
+            f"twistslam, track score >= {threshold:g}": evaluate(root, all_boxes, args.seqs, threshold),
+            "AB3DMOT thresholded (3.24)": evaluate(root, ab3dmot / "thresholded", args.seqs),
+        }
+        for seq in args.seqs:
+            print_table(f"sequence {seq}", [(k, v.sequences[seq]) for k, v in runs.items()])
+        print_table("overall (counts summed over the sequences)",
+                    [(k, v.overall) for k, v in runs.items()])
+
+        if not args.no_ablation:
+            rows = []
+            for name, overrides in ABLATIONS.items():
+                out = Path(tmp) / f"ablation{len(rows)}"
+                track_all(root, args.seqs, overrides, out)
+                (out / "every").mkdir()
+                (out / "every" / "tracking").symlink_to(out / "tracking_all")
+                ev_all = evaluate(root, out / "every", args.seqs)
+                ev_thr = evaluate(root, out / "every", args.seqs, threshold)
+                rows.append((f"{name} (all)", ev_all.overall))
+                rows.append((f"{name} (>= {threshold:g})", ev_thr.overall))
+            print_table("ablation (overall)", rows)
+
+        print("\nsmoothness (camera frame, tracks >= 10 frames): RMS d(speed) m/s/frame, "
+              "RMS d(yaw rate) deg/s/frame, tracks")
+        sources = {"twistslam (>= threshold)": lambda s: read_tracking_results(ours / "tracking" / f"{s}.txt"),
+                   "AB3DMOT thresholded": lambda s: read_tracking_results(ab3dmot / "thresholded" / "tracking" / f"{s}.txt"),
+                   "ground truth (labels)": lambda s: read_labels(root / "training" / "label_02" / f"{s}.txt").of_class("Car")}
+        for name, load in sources.items():
+            tables = [load(s) for s in args.seqs]
+            per = [smoothness(t) for t in tables]
+            n = sum(p[2] for p in per)
+            w = np.array([p[2] for p in per], dtype=float)
+            ds = np.sqrt(np.nansum(w * np.array([p[0] for p in per]) ** 2) / w.sum())
+            dy = np.sqrt(np.nansum(w * np.array([p[1] for p in per]) ** 2) / w.sum())
+            print(f"  {name:28s} {ds:8.3f} {dy:8.2f} {n:5d}")
+
+    print("\nspeed: C++ tracker frames/s per sequence "
+          + " ".join(f"{s}:{f:.0f}" for s, f in zip(args.seqs, fps))
+          + f"; median {np.median(fps):.0f} frames/s")
+    print(f"AB3DMOT: {AB3DMOT_PUBLISHED_HZ:.0f} frames/s published (Python; not run here) -> "
+          f"ratio {np.median(fps) / AB3DMOT_PUBLISHED_HZ:.1f}x")
+    print(f"peak memory (RSS of this process, all runs): "
+          f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
+
+
+if __name__ == "__main__":
+    main()
