@@ -1,5 +1,5 @@
 #pragma once
-// Mechanical-link projection operators Pi (TwistSLAM, DESIGN.md "Mechanical link"):
+// Mechanical-link projection operators Pi (TwistSLAM, docs/design.md "Mechanical link"):
 // 6x6 projectors onto the twist sub-space a link allows. The object update is
 // T_w_o(i+1) = exp(Pi xi) T_w_o(i) (paper eq. 2 and eq. 4).
 #include "geometry/types.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// SE(3) as 4x4 matrices with twists xi = [v; w] (translation part first, DESIGN.md).
+// SE(3) as 4x4 matrices with twists xi = [v; w] (translation part first, docs/design.md).
 // Closed forms after Barfoot, "State Estimation for Robotics", sec. 7.1 (same ordering).
 #include "geometry/types.hpp"
 

@@ -1,6 +1,6 @@
 #pragma once
 // Rectified pinhole stereo pair built from KITTI's P2 / P3. Points live in the rectified
-// reference camera frame c (DESIGN.md); each colour camera sits at a small offset from it,
+// reference camera frame c (docs/design.md); each colour camera sits at a small offset from it,
 // so X_left = X_c + t_left, and P2 = K [I | t_left] (the fourth column is never dropped).
 #include "geometry/types.hpp"
 

@@ -1,5 +1,5 @@
 #pragma once
-// Fixed-size Eigen aliases shared by every module. Twists are xi = [v; w] (DESIGN.md).
+// Fixed-size Eigen aliases shared by every module. Twists are xi = [v; w] (docs/design.md).
 #include <Eigen/Dense>  // Core + LU + Geometry + SVD: every module needs them
 
 namespace twistslam {

@@ -1,5 +1,5 @@
 // Pose-only optimisation (paper eq. 3). A dense 6-DoF Levenberg-Marquardt on the left-
-// multiplied twist T <- exp(delta) T (delta = [v; w], DESIGN.md), Huber-robustified
+// multiplied twist T <- exp(delta) T (delta = [v; w], docs/design.md), Huber-robustified
 // (iteratively reweighted normal equations), inside rounds that re-classify every observation
 // as inlier / outlier with a chi2 test, so that an outlier of one round can come back later.
 // With ~600 observations one LM iteration costs a few microseconds per observation, far less
