@@ -92,9 +92,9 @@ TEST(Tracker, LostFramesAreNotReportedBeforeTheObjectComesBack) {
 
 // With report_tentative_frames = false nothing before the confirmation is reported, not
 // even a missed frame of the tentative period (tentative_max_misses lets it survive one).
-// KNOWN BUG (currently fails): set_reported_flags fills the gap before the first reported
-// detection (frame 3) without checking confirmed_frame, so the predicted frame 2 is reported
-// while the detected frames 0 and 1 around it are not.
+// (Regression: set_reported_flags used to fill the gap before the first reported detection,
+// frame 3, without checking confirmed_frame, reporting the predicted frame 2 between the
+// unreported detected frames 0 and 1 and frame 3; fixed in eb0d78a.)
 TEST(Tracker, NothingBeforeTheConfirmationIsReportedWhenTentativeFramesAreNot) {
   TrackerOptions o = scenes::options();
   o.tentative_max_misses = 1;
