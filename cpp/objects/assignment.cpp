@@ -1,5 +1,6 @@
 #include "objects/assignment.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -60,22 +61,28 @@ std::vector<std::pair<int, int>> solve_assignment(const Eigen::MatrixXd& cost, d
   if (cost.rows() == 0 || cost.cols() == 0) return pairs;
   const bool transpose = cost.rows() > cost.cols();
   Eigen::MatrixXd a = transpose ? Eigen::MatrixXd(cost.transpose()) : cost;
-  // Forbidden pairs cost more than any sum of allowed ones: the optimum first maximises the
-  // number of allowed pairs, then minimises their cost (as the KITTI devkit's gating does).
-  double max_allowed = 0;
+  // Allowed costs are shifted to be >= 0 (each row is assigned exactly once, so a constant
+  // shift changes every assignment's total alike), then forbidden pairs cost more than any
+  // sum of allowed ones: the optimum first maximises the number of allowed pairs, then
+  // minimises their cost (as the KITTI devkit's gating does).
+  double min_allowed = std::numeric_limits<double>::infinity(), max_allowed = 0;
   int n_allowed = 0;
   for (Eigen::Index k = 0; k < a.size(); ++k) {
     const double c = a.data()[k];
-    if (std::isfinite(c) && c <= max_cost) max_allowed = std::max(max_allowed, std::abs(c)), ++n_allowed;
+    if (std::isfinite(c) && c <= max_cost) {
+      min_allowed = std::min(min_allowed, c);
+      max_allowed = std::max(max_allowed, c);
+      ++n_allowed;
+    }
   }
   if (n_allowed == 0) return pairs;
-  const double forbidden = (max_allowed + 1.0) * (std::min(a.rows(), a.cols()) + 1.0);
+  const double forbidden = (max_allowed - min_allowed + 1.0) * (std::min(a.rows(), a.cols()) + 1.0);
   Eigen::MatrixXd allowed = Eigen::MatrixXd::Zero(a.rows(), a.cols());
   for (Eigen::Index k = 0; k < a.size(); ++k) {
     double& c = a.data()[k];
     const bool ok = std::isfinite(c) && c <= max_cost;
     allowed.data()[k] = ok;
-    if (!ok) c = forbidden;
+    c = ok ? c - min_allowed : forbidden;
   }
   const std::vector<int> col_of_row = hungarian(a);
   for (int r = 0; r < static_cast<int>(col_of_row.size()); ++r) {

@@ -194,10 +194,10 @@ TEST(Assignment, LargeCostScaleMatchesBruteForce) {
 }
 
 // The header promises the optimum for any cost matrix, negative entries included (a cost
-// like -IoU or a log-likelihood is negative). KNOWN BUG (currently fails): the penalty given
-// to forbidden pairs, (max|c| + 1) (min(rows, cols) + 1), is smaller than the cost spread of
-// one more allowed pair when costs are negative, so the Hungarian prefers a forbidden pair.
-// Here the only 3-pair assignment (0,1) (1,2) (2,0) costs 30; (0,0) (1,1) + forbidden (2,2)
+// like -IoU or a log-likelihood is negative). Regression: a penalty for forbidden pairs of
+// (max|c| + 1) (min(rows, cols) + 1) was smaller than the cost spread of one more allowed pair
+// when costs are negative, so the Hungarian preferred a forbidden pair (fixed by shifting the
+// allowed costs to >= 0 first). Here the only 3-pair assignment (0,1) (1,2) (2,0) costs 30; (0,0) (1,1) + forbidden (2,2)
 // costs -20 + 44 = 24 to the solver, which then returns 2 pairs instead of 3.
 TEST(Assignment, NegativeCostsStillMaximiseThePairs) {
   Eigen::MatrixXd c(3, 3);
@@ -209,7 +209,7 @@ TEST(Assignment, RandomSignedCostsMatchBruteForce) {
   random_trials(-10.0, 10.0, 1500, 17);  // passes: uniform costs rarely hit the bug
 }
 
-// KNOWN BUG, as above (currently fails): costs at the extremes -10 / +10 with many forbidden
+// Regression, as above: costs at the extremes -10 / +10 with many forbidden
 // pairs find counter-examples at random (about 1 matrix in 1000).
 TEST(Assignment, RandomExtremeSignedCostsMatchBruteForce) {
   random_trials(-10.0, 10.0, 6000, 19, true);
