@@ -30,8 +30,11 @@ def test_cli_ground_truth_is_perfect(tmp_path, capsys):
     (tmp_path / "tracking").mkdir()
     shutil.copy(LABEL, tmp_path / "tracking" / "0001.txt")
     out = tmp_path / "m.json"
+    root = tmp_path / "labels_only"  # calibration and labels, no oxts: the camera-frame case
+    for folder in ("calib", "label_02"):
+        shutil.copytree(ROOT / "training" / folder, root / "training" / folder)
     with pytest.warns(UserWarning, match="camera frame"):
-        code = cli.main(["eval", str(ROOT), str(tmp_path), "--seq", "0001", "--json", str(out),
+        code = cli.main(["eval", str(root), str(tmp_path), "--seq", "0001", "--json", str(out),
                          "--plots", str(tmp_path / "plots"), "--markdown", str(tmp_path / "r.md")])
     assert code == 0
     text = capsys.readouterr().out
@@ -40,10 +43,10 @@ def test_cli_ground_truth_is_perfect(tmp_path, capsys):
     assert mot_lines and "100.00" in mot_lines[0]
 
     m = json.loads(out.read_text())
-    assert set(m) == {"objects", "objects_mean", "mot"}  # no camera_poses.txt -> no camera
+    assert set(m) == {"objects", "objects_mean", "mot", "settings"}  # no camera_poses.txt -> no camera
     assert set(m["mot"]) == {"2d", "bv", "3d"}
     for mode, mot in m["mot"].items():
-        assert set(mot) == MOT_KEYS
+        assert MOT_KEYS <= set(mot)  # plus the protocol and the score-sweep metrics
         assert mot["mota"] == pytest.approx(100.0) and mot["motp"] == pytest.approx(100.0)
         assert (mot["idsw"], mot["frag"], mot["fp"], mot["fn"]) == (0, 0, 0, 0)
         assert mot["mt"] == pytest.approx(100.0) and mot["ml"] == 0.0

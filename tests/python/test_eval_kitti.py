@@ -20,11 +20,24 @@ LABELS = require_real_data("kitti_tracking", "training", "label_02")
 SEQS = ["0001", "0004", "0020"]
 
 
-def evaluate(tmp_path: Path, seq: str, results: ObjectTable):
+@pytest.fixture(scope="module")
+def labels_only_root(tmp_path_factory) -> Path:
+    """The real calibration and labels without oxts: the evaluator's camera-frame case (the
+    hand-computed expectations below shift boxes in each frame's camera frame; 0001 has oxts
+    in the data folder, which would move the comparison into the world frame)."""
+    import shutil
+
+    root = tmp_path_factory.mktemp("labels_only")
+    for folder in ("calib", "label_02"):
+        shutil.copytree(ROOT / "training" / folder, root / "training" / folder)
+    return root
+
+
+def evaluate(root: Path, tmp_path: Path, seq: str, results: ObjectTable):
     write_tracking_results(tmp_path / "tracking" / f"{seq}.txt", results)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the shared data has no oxts: camera-frame warning
-        return evaluate_sequence(ROOT, tmp_path, seq)
+        warnings.simplefilter("ignore")  # no oxts: camera-frame warning
+        return evaluate_sequence(root, tmp_path, seq)
 
 
 def easy_cars(gt: ObjectTable) -> np.ndarray:
@@ -33,9 +46,9 @@ def easy_cars(gt: ObjectTable) -> np.ndarray:
 
 
 @pytest.mark.parametrize("seq", SEQS)
-def test_ground_truth_as_result_is_perfect(tmp_path, seq):
+def test_ground_truth_as_result_is_perfect(labels_only_root, tmp_path, seq):
     gt = read_labels(LABELS / f"{seq}.txt")
-    m = evaluate(tmp_path, seq, gt)
+    m = evaluate(labels_only_root, tmp_path, seq, gt)
     for mode in ("2d", "bv", "3d"):
         mot = m.mot[mode]
         assert mot.mota == pytest.approx(100.0) and mot.motp == pytest.approx(100.0)
@@ -73,12 +86,12 @@ def test_hand_formula_for_an_axis_aligned_box():
 
 
 @pytest.mark.parametrize("seq", SEQS)
-def test_sideways_shift_lowers_bv_and_3d_motp_as_computed_by_hand(tmp_path, seq):
+def test_sideways_shift_lowers_bv_and_3d_motp_as_computed_by_hand(labels_only_root, tmp_path, seq):
     gt = read_labels(LABELS / f"{seq}.txt")
     shifted = read_labels(LABELS / f"{seq}.txt")
     real = shifted.box_3d[:, 3] > 0  # DontCare rows carry placeholder sizes
     shifted.box_3d[real, 0] += 0.5
-    m = evaluate(tmp_path, seq, shifted)
+    m = evaluate(labels_only_root, tmp_path, seq, shifted)
 
     counted = easy_cars(gt)
     expected = 100.0 * np.mean([hand_iou_of_shift(b, 0.5) for b in gt.box_3d[counted]])
@@ -106,12 +119,12 @@ def longest_easy_car(gt: ObjectTable) -> int:
 
 
 @pytest.mark.parametrize("seq", SEQS)
-def test_dropping_a_track_counts_its_easy_frames_as_misses(tmp_path, seq):
+def test_dropping_a_track_counts_its_easy_frames_as_misses(labels_only_root, tmp_path, seq):
     gt = read_labels(LABELS / f"{seq}.txt")
     tid = longest_easy_car(gt)
     n_easy = int((easy_cars(gt) & (gt.track_id == tid)).sum())
     assert 0 < n_easy < (gt.track_id == tid).sum()  # the easy filter matters for this track
-    m = evaluate(tmp_path, seq, gt.select(gt.track_id != tid))
+    m = evaluate(labels_only_root, tmp_path, seq, gt.select(gt.track_id != tid))
     n_gt = easy_cars(gt).sum()
     for mode in ("2d", "bv", "3d"):
         mot = m.mot[mode]
@@ -139,14 +152,14 @@ def two_overlapping_tracks(gt: ObjectTable) -> tuple[int, int, int]:
 
 
 @pytest.mark.parametrize("seq", SEQS)
-def test_swapping_two_ids_mid_track_counts_id_switches(tmp_path, seq):
+def test_swapping_two_ids_mid_track_counts_id_switches(labels_only_root, tmp_path, seq):
     gt = read_labels(LABELS / f"{seq}.txt")
     a, b, f0 = two_overlapping_tracks(gt)
     swapped = read_labels(LABELS / f"{seq}.txt")
     later = swapped.frame >= f0
     ta, tb = later & (swapped.track_id == a), later & (swapped.track_id == b)
     swapped.track_id[ta], swapped.track_id[tb] = b, a
-    m = evaluate(tmp_path, seq, swapped)
+    m = evaluate(labels_only_root, tmp_path, seq, swapped)
     n_gt = easy_cars(gt).sum()
     for mode in ("2d", "bv", "3d"):
         mot = m.mot[mode]
@@ -155,21 +168,21 @@ def test_swapping_two_ids_mid_track_counts_id_switches(tmp_path, seq):
         assert mot.motp == pytest.approx(100.0)
 
 
-def test_no_ground_truth_poses_warns_once_and_uses_camera_frame(tmp_path):
+def test_no_ground_truth_poses_warns_once_and_uses_camera_frame(labels_only_root, tmp_path):
     gt = read_labels(LABELS / "0001.txt")
     write_tracking_results(tmp_path / "tracking" / "0001.txt", gt)
     with pytest.warns(UserWarning) as record:
-        m = evaluate_sequence(open_dataset(ROOT, "0001"), tmp_path)
+        m = evaluate_sequence(open_dataset(labels_only_root, "0001"), tmp_path)
     assert len([w for w in record if "T_w_c = I" in str(w.message)]) == 1
     assert m.world_frame == "camera frame" and m.camera is None
 
 
-def test_results_without_image_boxes_are_projected(tmp_path):
+def test_results_without_image_boxes_are_projected(labels_only_root, tmp_path):
     """Rows with ``-1`` image boxes get their 3D box projected through P2 (the paper's 2D)."""
     gt = read_labels(LABELS / "0001.txt")
     no_2d = read_labels(LABELS / "0001.txt")
     no_2d.box_2d[:] = -1
-    m = evaluate(tmp_path, "0001", no_2d)
+    m = evaluate(labels_only_root, tmp_path, "0001", no_2d)
     assert m.mot["3d"].motp == pytest.approx(100.0) and m.mot["bv"].motp == pytest.approx(100.0)
     # projected 3D boxes are close to, not equal to, the annotated image boxes
     mot = m.mot["2d"]
