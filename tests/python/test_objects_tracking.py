@@ -27,7 +27,8 @@ pytestmark = pytest.mark.filterwarnings("ignore::twistslam.datasets.MissingDataW
 
 DETECTIONS = ("detections", "pointrcnn_car_val")
 SIM_SEQ = "0000"
-SIM_RANGE = 40.0  # m: farther, the oracle's centre noise (0.12 m per 10 m and axis) rules IoU >= 0.5 out
+# m: farther, the oracle's centre noise (0.12 m per 10 m and axis) rules out IoU >= 0.5
+SIM_RANGE = 40.0
 
 
 def _open(root: Path, seq: str):
@@ -42,7 +43,8 @@ def _overlap_fraction(boxes, gt) -> float:
     for f in np.unique(boxes.frame):
         rows, labels = boxes.frame == f, gt.frame == f
         if labels.any():
-            hits += int((box_iou_3d(boxes.box_3d[rows], gt.box_3d[labels]).max(axis=1) >= 0.25).sum())
+            iou = box_iou_3d(boxes.box_3d[rows], gt.box_3d[labels]).max(axis=1)
+            hits += int((iou >= 0.25).sum())
     return hits / len(boxes)
 
 
@@ -112,7 +114,9 @@ def _moving_car_visits(seq, root: Path, cfg) -> list[tuple[int, list[int], np.nd
         for f, box in zip(frames, boxes):
             k = _best(detections, f, box, 0.25)
             near = np.hypot(box[0], box[2]) <= SIM_RANGE
-            if near and k is not None and detections.score[detections.frame == f][k] >= cfg.high_score:
+            score = detections.score[detections.frame == f][k] if k is not None else -np.inf
+            confident = score >= cfg.high_score
+            if near and confident:
                 seen.append(int(f))
         runs: list[list[int]] = []
         for f in seen:
@@ -328,7 +332,8 @@ def metric_results(kitti_tracking, seq_0001):
 def test_config_association_metrics_run(metric, metric_results, seq_0001):
     result = metric_results[metric]
     gt = seq_0001.gt_objects
-    assert _overlap_fraction(result.thresholded(), gt.select(np.isin(gt.cls, ["Car", "Van"]))) >= 0.7
+    cars = gt.select(np.isin(gt.cls, ["Car", "Van"]))
+    assert _overlap_fraction(result.thresholded(), cars) >= 0.7
     others = [m for m in GATES if m != metric]
     assert all(len(metric_results[m].tracking) != len(result.tracking)
                or not np.array_equal(metric_results[m].tracking.box_3d, result.tracking.box_3d)
@@ -372,7 +377,8 @@ def test_solve_assignment_matches_scipy(shape):
         rows, cols = linear_sum_assignment(cost)
         assert pairs.shape == (min(shape), 2) and pairs.dtype == np.int64
         assert len(set(pairs[:, 0])) == len(set(pairs[:, 1])) == min(shape)
-        assert cost[pairs[:, 0], pairs[:, 1]].sum() == pytest.approx(cost[rows, cols].sum(), abs=1e-9)
+        total = cost[pairs[:, 0], pairs[:, 1]].sum()
+        assert total == pytest.approx(cost[rows, cols].sum(), abs=1e-9)
 
 
 @pytest.mark.parametrize("shape", [(6, 6), (4, 9), (9, 4)])
