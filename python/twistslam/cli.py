@@ -31,6 +31,7 @@ def _run_eval(args: argparse.Namespace) -> int:
         args.root, args.results, args.seq,
         iou_threshold=args.iou, difficulty=args.difficulty, cls=args.cls,
         object_alignment="se3" if args.align_objects else "none", split=args.split,
+        protocol=args.protocol,
     )
     paper = load_paper_tables(args.paper) if args.paper else None
     print(render_text(metrics, paper), end="")
@@ -56,8 +57,9 @@ def _add_eval(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "eval",
         help="evaluate results against KITTI tracking ground truth",
-        description="Camera RPE / ATE, per-object ATE / RPE, TP and MOTP (2D, bird view, 3D) "
-        "and CLEAR MOT of one sequence, printed as the paper's tables.",
+        description="Camera RPE / ATE, per-object ATE / RPE, TP and MOTP (2D, bird view, 3D), "
+        "CLEAR MOT, sAMOTA / AMOTA / AMOTP and HOTA of one sequence, printed as the paper's "
+        "tables; every MOT number names the protocol that produced it.",
     )
     p.add_argument("root", help="KITTI tracking root (holding training/calib, label_02, ...)")
     p.add_argument("results", help="results directory: camera_poses.txt and/or tracking/XXXX.txt")
@@ -67,7 +69,11 @@ def _add_eval(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--markdown", metavar="FILE", help="write the tables as Markdown")
     p.add_argument("--plots", metavar="DIR", help="write bird-view trajectory PNGs")
     p.add_argument("--iou", type=_iou, default=0.25, help="IoU threshold of a true positive")
-    p.add_argument("--difficulty", default="easy", choices=["easy", "moderate", "hard"])
+    p.add_argument("--protocol", default="clear", choices=["clear", "kitti"],
+                   help="clear: CLEAR MOT definitions, the paper's object tables (default); "
+                   "kitti: the KITTI tracking devkit as AB3DMOT's evaluate.py runs it")
+    p.add_argument("--difficulty", default=None, choices=["easy", "moderate", "hard"],
+                   help="default: the protocol's (clear: easy, kitti: hard)")
     p.add_argument("--cls", default="car", help="evaluated class (car, pedestrian, ...)")
     p.add_argument("--align-objects", action="store_true",
                    help="report object ATE after SE(3) alignment (systems without canonical pose)")

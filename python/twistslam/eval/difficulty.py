@@ -27,14 +27,18 @@ class Difficulty:
     max_occlusion: int
     max_truncation: float
 
-    def accepts(self, table: ObjectTable) -> np.ndarray:
-        """(N,) bool: the row is inside this difficulty level."""
-        height = table.box_2d[:, 3] - table.box_2d[:, 1]
-        return (
-            (height >= self.min_height)
-            & (table.occlusion <= self.max_occlusion)
-            & (table.truncation <= self.max_truncation)
+    def accepts(self, table: ObjectTable, *, check_height: bool = True) -> np.ndarray:
+        """(N,) bool: the row is inside this difficulty level.
+
+        ``check_height=False`` judges occlusion and truncation only: the KITTI tracking
+        devkit applies the minimum height to tracker boxes, never to ground truth.
+        """
+        inside = (table.occlusion <= self.max_occlusion) & (
+            table.truncation <= self.max_truncation
         )
+        if check_height:
+            inside &= table.box_2d[:, 3] - table.box_2d[:, 1] >= self.min_height
+        return inside
 
 
 #: the KITTI object benchmark's three levels

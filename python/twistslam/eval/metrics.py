@@ -34,12 +34,23 @@ class EvalSettings:
     ``object_alignment``: ``"none"`` reports the canonical object ATE (estimated boxes taken
     as they are), ``"se3"`` the ATE after Umeyama alignment of each estimated track onto its
     ground-truth track, for systems whose object frames are not canonical.
+    ``protocol``: the rules that produced the object and MOT numbers, ``"clear"`` or
+    ``"kitti"`` (:mod:`.protocol`).
     """
 
     iou_threshold: float = 0.25
     difficulty: Difficulty = DIFFICULTIES["easy"]
     cls: str = "car"
     object_alignment: str = "none"
+    protocol: str = "clear"
+
+    def to_dict(self) -> dict:
+        """The ``settings`` section of ``metrics.json``."""
+        return {
+            "protocol": self.protocol, "difficulty": self.difficulty.name,
+            "iou_threshold": self.iou_threshold, "class": self.cls,
+            "object_alignment": self.object_alignment,
+        }
 
 
 @dataclass
@@ -120,11 +131,16 @@ class SequenceMetrics:
         return out
 
     def to_dict(self) -> dict:
-        """The ``metrics.json`` structure; absent inputs leave their section out."""
+        """The ``metrics.json`` structure; absent inputs leave their section out.
+
+        With tracking results, ``settings`` names the protocol, difficulty and IoU threshold
+        behind ``objects`` and ``mot``, and every ``mot`` entry repeats its protocol.
+        """
         out: dict = {}
         if self.camera is not None:
             out["camera"] = {k: json_value(v) for k, v in self.camera.to_dict().items()}
         if self.mot:
+            out["settings"] = self.settings.to_dict()
             aligned = self.settings.object_alignment == "se3"
             out["objects"] = [o.to_dict(aligned) for o in self.objects]
             out["objects_mean"] = {k: json_value(v) for k, v in self.objects_mean.items()}

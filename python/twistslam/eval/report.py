@@ -29,7 +29,9 @@ CAMERA_COLUMNS = [
 ]
 MOT_COLUMNS = [
     ("mota", "MOTA"), ("motp", "MOTP"), ("tp_rate", "TP"), ("idsw", "IDSW"), ("frag", "FRAG"),
-    ("fp", "FP"), ("fn", "FN"), ("mt", "MT"), ("ml", "ML"),
+    ("fp", "FP"), ("fn", "FN"), ("mt", "MT"), ("ml", "ML"), ("samota", "sAMOTA"),
+    ("amota", "AMOTA"), ("amotp", "AMOTP"), ("hota", "HOTA"), ("deta", "DetA"),
+    ("assa", "AssA"),
 ]
 
 
@@ -102,6 +104,7 @@ def _object_tables(runs: list[SequenceMetrics], paper: dict | None) -> list[Tabl
                      if run.world_frame != "camera frame" else
                      "no ground-truth camera poses: objects compared in each frame's camera frame")
             pose.notes.append(f"{run.seq}: {ate} ATE; {where}")
+            det.notes.append(f"{run.seq}: {protocol_note(run.settings.protocol)}")
     if all_rows:
         # over all tracks of all sequences, as the paper's mean row
         mean = {k: _nanmean(r[k] for r in all_rows) for k in OBJECT_KEYS}
@@ -132,15 +135,26 @@ def _camera_table(runs: list[SequenceMetrics], paper: dict | None) -> Table:
     return cam
 
 
+def protocol_note(protocol: str) -> str:
+    """One line naming a protocol and its rules, printed under the tables it produced."""
+    from .protocol import get_protocol
+
+    return f"protocol {protocol}: {get_protocol(protocol).description}"
+
+
 def _mot_table(runs: list[SequenceMetrics]) -> Table:
     s = runs[0].settings
-    title = (f"CLEAR MOT ({s.cls}, {s.difficulty.name}, IoU >= {s.iou_threshold:g}; "
-             "MOTA, MOTP, TP, MT, ML in %)")
+    protocols = sorted({run.settings.protocol for run in runs if run.mot})
+    title = (f"CLEAR MOT ({'/'.join(protocols)} protocol; {s.cls}, {s.difficulty.name}, "
+             f"IoU >= {s.iou_threshold:g}; all but IDSW, FRAG, FP, FN in %)")
     mot = Table(title, ["seq", "overlap"] + [h for _, h in MOT_COLUMNS], [])
     for run in runs:
         for mode, m in run.mot.items():
             mot.rows.append([f"{int(run.seq):02d}", mode.upper()]
                             + _cells(vars(m), MOT_COLUMNS, 2))
+    mot.notes += [protocol_note(p) for p in protocols]
+    mot.notes.append("sAMOTA, AMOTA, AMOTP: AB3DMOT's averages over 40 recall-sampled score "
+                     "thresholds; HOTA, DetA, AssA: means over alpha 0.05..0.95 (TrackEval)")
     return mot
 
 

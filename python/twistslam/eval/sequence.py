@@ -9,11 +9,12 @@ import numpy as np
 
 from ..datasets import KittiTracking, MissingDataWarning, ObjectTable
 from .camera import evaluate_camera
-from .clear_mot import clear_mot
 from .difficulty import Difficulty, get_difficulty
-from .matching import MODES, Matching, iou_function, match_sequence
+from .matching import MODES, Matching, iou_function, sequence_overlaps
 from .metrics import EvalSettings, ObjectTrackMetrics, SequenceMetrics, Trajectories
+from .mot import sequence_mot
 from .object_poses import TrackPoseErrors, track_pose_errors, world_poses
+from .protocol import Protocol, get_protocol
 from .results import load_results, seq_name
 from .track_metrics import pair_tracks, track_detection
 
@@ -57,6 +58,17 @@ def fill_missing_box_2d(table: ObjectTable, dataset) -> ObjectTable:
     return ObjectTable(**{**vars(table), "box_2d": box_2d})
 
 
+def ground_truth(dataset, name: str) -> ObjectTable:
+    """The sequence's labels; ``FileNotFoundError`` naming the label file looked for."""
+    gt = dataset.gt_objects
+    if gt is None:
+        base = getattr(dataset, "base", None)
+        where = (Path(base) / "label_02" / f"{name}.txt" if base is not None
+                 else f"{dataset!r} has no gt_objects")
+        raise FileNotFoundError(f"sequence {name}: ground-truth labels not found: {where}")
+    return gt
+
+
 def _object_rows(
     seq: str, cls: str, gt: ObjectTable, est: ObjectTable, matchings: dict[str, Matching],
     gt_T_w_c: np.ndarray | None, est_T_w_c: np.ndarray | None, traj: Trajectories,
@@ -96,10 +108,12 @@ def evaluate_sequence(
     seq: int | str | None = None,
     *,
     iou_threshold: float = 0.25,
-    difficulty: str | Difficulty = "easy",
+    difficulty: str | Difficulty | None = None,
     cls: str = "car",
     object_alignment: str = "none",
     split: str = "training",
+    protocol: str | Protocol = "clear",
+    score_metrics: bool = True,
 ) -> SequenceMetrics:
     """Evaluate a system's output for one sequence against KITTI tracking ground truth.
 
@@ -110,9 +124,15 @@ def evaluate_sequence(
     results_dir : holds ``camera_poses.txt`` and/or ``tracking/<seq>.txt``.
     seq : sequence number; defaults to the dataset's own.
     iou_threshold : minimum IoU of a true positive (2D, BV and 3D alike).
-    difficulty : ``"easy"``, ``"moderate"``, ``"hard"`` or a :class:`Difficulty`.
+    difficulty : ``"easy"``, ``"moderate"``, ``"hard"`` or a :class:`Difficulty`; None
+        takes the protocol's default (``clear``: easy, ``kitti``: hard).
     cls : evaluated class (``car`` or ``pedestrian``; others have no neighbour class).
     object_alignment : ``"none"`` (canonical object ATE) or ``"se3"`` (Umeyama-aligned).
+    protocol : ``"clear"`` (CLEAR MOT definitions, the paper's object tables) or
+        ``"kitti"`` (the KITTI devkit as AB3DMOT runs it); see :mod:`.protocol`. It decides
+        CLEAR MOT, sAMOTA and HOTA, and which ground truth the per-object TP rates count.
+    score_metrics : compute sAMOTA / AMOTA / AMOTP (about 40 re-matchings per overlap
+        mode); False leaves them NaN.
 
     Notes
     -----
@@ -133,8 +153,10 @@ def evaluate_sequence(
         dataset = dataset_or_root
         seq = seq if seq is not None else getattr(dataset, "seq")
     name = seq_name(seq)
+    protocol = get_protocol(protocol)
     settings = EvalSettings(
-        iou_threshold, get_difficulty(difficulty), cls.lower(), object_alignment
+        iou_threshold, get_difficulty(difficulty or protocol.default_difficulty), cls.lower(),
+        object_alignment, protocol.name,
     )
     results = load_results(results_dir, name)
     gt_T_w_c = dataset.gt_poses
@@ -155,10 +177,7 @@ def evaluate_sequence(
         out.trajectories.camera_est = results.camera_poses
 
     if results.tracking is not None:
-        gt = dataset.gt_objects
-        if gt is None:
-            raise FileNotFoundError(f"sequence {name}: no ground-truth labels to evaluate "
-                                    f"{results.tracking_path} against")
+        gt = ground_truth(dataset, name)
         if gt_T_w_c is None:
             est_T_w_c, out.world_frame = None, "camera frame"
         elif results.camera_poses is not None:
@@ -166,14 +185,18 @@ def evaluate_sequence(
         else:
             est_T_w_c, out.world_frame = gt_T_w_c, "ground-truth camera poses"
         est = fill_missing_box_2d(results.tracking, dataset)
-        matchings = {
-            mode: match_sequence(
+        overlaps = {
+            mode: sequence_overlaps(
                 gt, est, iou_function(mode), cls=settings.cls, difficulty=settings.difficulty,
-                threshold=iou_threshold, mode=mode,
+                threshold=iou_threshold, mode=mode, gt_min_height=protocol.gt_min_height,
             )
             for mode in MODES
         }
-        out.mot = {mode: clear_mot(m) for mode, m in matchings.items()}
+        matchings = {mode: o.match() for mode, o in overlaps.items()}
+        out.mot = {
+            mode: sequence_mot(o, protocol, score_metrics=score_metrics)[0]
+            for mode, o in overlaps.items()
+        }
         out.objects = _object_rows(name, settings.cls, gt, est, matchings,
                                    gt_T_w_c, est_T_w_c, out.trajectories)
     return out
