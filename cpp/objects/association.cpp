@@ -41,7 +41,13 @@ Eigen::MatrixXd association_cost(const std::vector<geometry::Box3D>& tracks,
       const auto& b = detections[j];
       switch (metric) {
         case AssociationMetric::kGiou3d: cost(i, j) = 1.0 - geometry::giou_3d(a, b); break;
-        case AssociationMetric::kIouBev: cost(i, j) = 1.0 - geometry::iou_bev(a, b); break;
+        case AssociationMetric::kIouBev: {
+          // boxes that do not overlap are never the same object under this metric, whatever
+          // the gate (1 - IoU saturates at 1 and cannot rank them)
+          const double iou = geometry::iou_bev(a, b);
+          cost(i, j) = iou > 0 ? 1.0 - iou : inf;
+          break;
+        }
         case AssociationMetric::kCentreDistance: cost(i, j) = (a.center - b.center).norm(); break;
       }
     }

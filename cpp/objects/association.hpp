@@ -12,7 +12,7 @@ namespace twistslam::objects {
 
 enum class AssociationMetric {
   kGiou3d,          // 1 - GIoU of the 3D boxes, in [0, 2] (AB3DMOT's choice on KITTI)
-  kIouBev,          // 1 - IoU of the bird-view rectangles, in [0, 1]
+  kIouBev,          // 1 - IoU of the bird-view rectangles, in [0, 1); no overlap: +inf
   kCentreDistance,  // distance of the box centres, m (the paper's 2 m rule)
 };
 

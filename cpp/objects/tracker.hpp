@@ -27,6 +27,7 @@ struct TrackerOptions {
   TrackerOptions() {
     window_options.link_sigma_translation = 0.1;  // camera -y is not the road normal
     window_options.max_iterations = 5;
+    window_options.const_sigma_translation = 0.1;
   }
   AssociationMetric metric = AssociationMetric::kGiou3d;
   double max_cost = 1.2;              // first pass gate, in the metric's unit (GIoU > -0.2)
