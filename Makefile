@@ -14,6 +14,7 @@ APT_PACKAGES := build-essential ccache libeigen3-dev libceres-dev libopencv-dev 
 # python files too: the editable redirect install freezes the list of modules at install time
 CPP_SOURCES := $(shell find cpp cmake -type f) $(shell find python -name "*.py") CMakeLists.txt pyproject.toml
 CPP_TEST_BUILD := build/cpp-tests
+REFERENCE_EVALUATORS := trackeval==1.3.0 eval-ab-3d-mot==2.3.0 pure-ab-3d-mot==2.2.0 association-quality-clavia==0.3.2 munkres==3.0.0
 
 .PHONY: setup apt build test test-cpp test-python demo clean help
 help:
@@ -37,6 +38,10 @@ apt:
 	$(PIP) install -q "torch==$(TORCH_VERSION)"
 	$(PIP) install -q scikit-build-core "pybind11>=2.12" "cmake>=3.22" ninja numpy
 	$(PIP) install -q --no-build-isolation -e ".[dev,models]"
+	@# independent reference implementations the evaluator's tests compare against (TrackEval's
+	@# HOTA, AB3DMOT's evaluator for sAMOTA / the devkit rules); --no-deps: their pins would
+	@# downgrade numpy and pull opencv / pycocotools, none of which the tested code paths need
+	$(PIP) install -q --no-deps $(REFERENCE_EVALUATORS)
 	@touch $@ .stamp-build
 
 # Rebuild the extension when C++ changes (incremental: build/{wheel_tag} is kept).

@@ -84,12 +84,20 @@ def _add_eval(sub: argparse._SubParsersAction) -> None:
 
 def _run_run(args: argparse.Namespace) -> int:
     from .config import Config
-    from .datasets import open_sequence
-    from .pipeline import run
+    from .datasets import MissingDataWarning, open_sequence
 
     config = Config.from_yaml(args.config) if args.config else Config()
     config.override(args.set)
-    sequence = open_sequence(args.root, args.seq, split=args.split)
+    with warnings.catch_warnings():
+        if args.no_images:  # images, scans are not read: do not warn that they are missing
+            warnings.simplefilter("ignore", MissingDataWarning)
+        sequence = open_sequence(args.root, args.seq, split=args.split)
+    if args.no_images and not args.detections:
+        raise ValueError("--no-images needs --detections (objects from detections alone)")
+    if args.detections:
+        return _run_objects(args, config, sequence)
+    from .pipeline import run
+
     result = run(sequence, config, progress=not args.no_progress)
     paths = result.save(args.out)
     t = result.timings.summary()
@@ -97,6 +105,24 @@ def _run_run(args: argparse.Namespace) -> int:
           f"(median {t['per_frame_ms']['median']:.1f} ms/frame), {result.num_lost} lost, "
           f"{int(result.is_keyframe.sum())} keyframes")
     print(f"wrote {', '.join(p.name for p in paths.values())} in {args.out}")
+    return 0
+
+
+def _run_objects(args: argparse.Namespace, config, sequence) -> int:
+    """``run --detections DIR --no-images``: 3D multi-object tracking from detections."""
+    from .objects import track_detections
+
+    if not args.no_images:
+        raise ValueError("--detections without --no-images: tracking objects inside the stereo "
+                         "SLAM is not available yet; add --no-images to track from the "
+                         "detections alone")
+    result = track_detections(sequence, args.detections, config)
+    paths = result.save(args.out)
+    n_tracks = sum(o.reported.any() for o in result.objects)
+    print(f"{result.seq}: {result.num_frames} frames, {n_tracks} tracks, "
+          f"{len(result.thresholded())} boxes, {result.frames_per_second:.0f} frames/s "
+          f"(tracking in the {result.frame} frame)")
+    print(f"wrote {', '.join(str(p.relative_to(args.out)) for p in paths.values())} in {args.out}")
     return 0
 
 
@@ -118,6 +144,12 @@ def _add_run(sub: argparse._SubParsersAction) -> None:
                    help="override a setting after --config, e.g. --set tracking.min_inliers=40 "
                    "run.max_frames=20 (repeatable)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--detections", metavar="DIR",
+                   help="3D detections: DIR/SEQ.txt (PointRCNN comma format or KITTI tracking "
+                   "results) or DIR/SEQ/NNNNNN.txt (KITTI object results); with --no-images, "
+                   "writes OUT/tracking/SEQ.txt (objects tracked from the detections alone)")
+    p.add_argument("--no-images", action="store_true",
+                   help="do not run the stereo SLAM (objects from --detections only)")
     p.set_defaults(handler=_run_run)
 
 
