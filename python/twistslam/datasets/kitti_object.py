@@ -30,7 +30,7 @@ import numpy as np
 from ._parsing import PathLike, iter_lines, parse_error, to_floats, to_int
 from .calibration import read_calibration
 from .frame import Frame
-from .labels import _bottom_to_centre_y
+from .labels import label_table
 from .objects import ObjectTable
 from .sensors import MissingDataWarning, read_image, read_velodyne
 
@@ -60,18 +60,8 @@ def read_object_labels(path: PathLike, frame: int = 0) -> ObjectTable:
         occ.append(to_int(tokens[2], path, line_no, "occluded"))
         values = to_floats(tokens[3:], path, line_no, "box")
         numbers.append(values if len(values) == 13 else np.append(values, 1.0))
-    if not cls:
-        return ObjectTable.empty(source=str(path))
-    v = np.stack(numbers)  # alpha x1 y1 x2 y2 h w l x y z ry score
-    h, w, length = v[:, 5], v[:, 6], v[:, 7]
-    x, y, z, ry = v[:, 8], v[:, 9], v[:, 10], v[:, 11]
     n = len(cls)
-    return ObjectTable(
-        frame=np.full(n, int(frame)), track_id=np.full(n, -1), cls=cls, truncation=trunc,
-        occlusion=occ, alpha=v[:, 0], box_2d=v[:, 1:5],
-        box_3d=np.stack([x, _bottom_to_centre_y(y, h), z, length, w, h, ry], axis=1),
-        score=v[:, 12], source=str(path),
-    )
+    return label_table(np.full(n, int(frame)), np.full(n, -1), cls, trunc, occ, numbers, path)
 
 
 class KittiObject:

@@ -53,9 +53,17 @@ def read_labels(path: PathLike) -> ObjectTable:
         occ.append(to_int(tokens[4], path, line_no, "occluded"))
         values = to_floats(tokens[5:], path, line_no, "box")
         numbers.append(values if len(values) == 13 else np.append(values, 1.0))
-    if not frame:
+    return label_table(frame, track, cls, trunc, occ, numbers, path)
+
+
+def label_table(frame, track, cls, trunc, occ, numbers: list[np.ndarray],
+                path: PathLike) -> ObjectTable:
+    """An :class:`ObjectTable` from the parsed label columns; ``numbers`` rows hold
+    ``alpha x1 y1 x2 y2 h w l x y z ry score`` with KITTI's bottom-centre ``y`` (shared by the
+    tracking and the object label readers)."""
+    if not len(numbers):
         return ObjectTable.empty(source=str(path))
-    v = np.stack(numbers)  # alpha x1 y1 x2 y2 h w l x y z ry score
+    v = np.stack(numbers)
     h, w, length = v[:, 5], v[:, 6], v[:, 7]
     x, y, z, ry = v[:, 8], v[:, 9], v[:, 10], v[:, 11]
     box_3d = np.stack([x, _bottom_to_centre_y(y, h), z, length, w, h, ry], axis=1)

@@ -18,6 +18,10 @@ using twistslam::Vec3;
 using twistslam::geometry::Box3D;
 using twistslam::objects::Detection;
 
+inline const Mat4 kI = Mat4::Identity();  // camera pose when tracking in the camera frame
+
+inline Vec3 position(const Mat4& T) { return T.block<3, 1>(0, 3); }
+
 inline Box3D make_box(double x, double y, double z, double l, double w, double h, double yaw) {
   Box3D b;
   b.center = Vec3(x, y, z);

@@ -14,12 +14,12 @@ using namespace twistslam;
 using namespace twistslam::objects;
 using scenes::Car;
 using scenes::detect;
+using scenes::kI;
+using scenes::position;
 
 namespace {
 
-const Mat4 kI = Mat4::Identity();
 
-Vec3 position(const Mat4& T) { return T.block<3, 1>(0, 3); }
 
 }  // namespace
 

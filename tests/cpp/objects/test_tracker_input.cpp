@@ -14,14 +14,14 @@ using namespace twistslam;
 using namespace twistslam::objects;
 using scenes::Car;
 using scenes::detect;
+using scenes::kI;
+using scenes::position;
 
 namespace {
 
-const Mat4 kI = Mat4::Identity();
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 const double kInf = std::numeric_limits<double>::infinity();
 
-Vec3 position(const Mat4& T) { return T.block<3, 1>(0, 3); }
 
 }  // namespace
 

@@ -15,13 +15,13 @@ using namespace twistslam;
 using namespace twistslam::objects;
 using scenes::Car;
 using scenes::detect;
+using scenes::kI;
+using scenes::position;
 
 namespace {
 
-const Mat4 kI = Mat4::Identity();
 constexpr double kDeg = M_PI / 180;
 
-Vec3 position(const Mat4& T) { return T.block<3, 1>(0, 3); }
 
 struct Errors {
   double raw_position = 0, raw_yaw = 0;      // RMS of the detections (detected frames)
