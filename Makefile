@@ -44,9 +44,12 @@ apt:
 	$(PIP) install -q --no-deps $(REFERENCE_EVALUATORS)
 	@touch $@ .stamp-build
 
-# Rebuild the extension when C++ changes (incremental: build/{wheel_tag} is kept).
+# Rebuild the extension when C++ changes (incremental: build/{wheel_tag} is kept). flock: two
+# builds started at once (parallel work in one checkout) would corrupt the shared build tree.
+BUILD_LOCK := flock build/.build.lock
 .stamp-build: $(CPP_SOURCES) | .stamp-venv
-	$(PIP) install -q --no-build-isolation --no-deps -e .
+	@mkdir -p build
+	$(BUILD_LOCK) $(PIP) install -q --no-build-isolation --no-deps -e .
 	@touch $@
 
 build: apt .stamp-venv .stamp-build
@@ -56,7 +59,8 @@ test: build test-cpp test-python
 test-cpp: apt .stamp-venv
 	$(VENV)/bin/cmake -S . -B $(CPP_TEST_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release \
 	  -DTWISTSLAM_BUILD_TESTS=ON -DTWISTSLAM_BUILD_PYTHON=OFF -DCMAKE_MAKE_PROGRAM=$(abspath $(VENV)/bin/ninja) > /dev/null
-	$(VENV)/bin/cmake --build $(CPP_TEST_BUILD)
+	@mkdir -p build
+	$(BUILD_LOCK) $(VENV)/bin/cmake --build $(CPP_TEST_BUILD)
 	cd $(CPP_TEST_BUILD) && $(abspath $(VENV)/bin/ctest) --output-on-failure
 
 test-python: build
