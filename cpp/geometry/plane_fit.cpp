@@ -39,7 +39,9 @@ Vec4 fit_plane_svd(const Points3& points) {
   if (points.rows() < 3) throw std::invalid_argument("fit_plane_svd: needs at least 3 points");
   const Eigen::RowVector3d centroid = points.colwise().mean();
   const Eigen::MatrixX3d centred = points.rowwise() - centroid;
-  Eigen::JacobiSVD<Eigen::MatrixX3d> svd(centred, Eigen::ComputeThinV);
+  // Full V: with a fixed number of columns (3) V is 3x3 either way, and Eigen only allows thin
+  // U/V for matrices with a dynamic column count (it asserts in a Debug build otherwise).
+  Eigen::JacobiSVD<Eigen::MatrixX3d> svd(centred, Eigen::ComputeFullV);
   const Vec3 n = svd.matrixV().col(2).normalized();
   return oriented(n, -n.dot(centroid.transpose()));
 }
