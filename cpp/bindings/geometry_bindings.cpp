@@ -2,6 +2,7 @@
 // Boxes are in boxes_bindings.cpp.
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <limits>
 
 #include "bindings/numpy_checks.hpp"
@@ -139,16 +140,34 @@ void bind_camera(py::module_& m) {
   py::class_<g::StereoCamera>(m, "StereoCamera", "Rectified pinhole stereo pair (KITTI P2/P3).")
       .def_static(
           "from_kitti",
-          [](py::handle P2, py::handle P3, int w, int h) {
+          [](py::handle P2, py::handle P3, int w, int h, double disparity_offset) {
             try {
               return g::StereoCamera::from_kitti(as_mat34(P2, "P_left"), as_mat34(P3, "P_right"),
-                                                 w, h);
+                                                 w, h, disparity_offset);
             } catch (const std::invalid_argument& e) {
               throw py::value_error(e.what());
             }
           },
-          "P_left"_a, "P_right"_a, "width"_a = 0, "height"_a = 0,
-          "Camera pair from the rectified 3x4 projections of the left and right images.")
+          "P_left"_a, "P_right"_a, "width"_a = 0, "height"_a = 0, "disparity_offset"_a = 0.0,
+          "Camera pair from the rectified 3x4 projections of the left and right images.\n\n"
+          "disparity_offset (px): added to every measured disparity u_left - u_right before it\n"
+          "becomes a depth (the right image's principal point is cx + disparity_offset); 0 trusts\n"
+          "the calibration. Finite, within +-8 px.")
+      .def(
+          "with_disparity_offset",
+          [](const g::StereoCamera& c, double offset) {
+            if (!std::isfinite(offset) || std::abs(offset) > 8.0)
+              throw py::value_error("StereoCamera.with_disparity_offset: offset must be finite "
+                                    "and within +-8 px");
+            g::StereoCamera out = c;
+            out.disparity_offset = offset;
+            return out;
+          },
+          "disparity_offset"_a,
+          "A copy of this camera whose measured disparities get ``disparity_offset`` px added\n"
+          "(see ``from_kitti``).")
+      .def_readonly("disparity_offset", &g::StereoCamera::disparity_offset,
+                    "px added to measured disparities (right principal point = cx + offset)")
       .def_readonly("fx", &g::StereoCamera::fx)
       .def_readonly("fy", &g::StereoCamera::fy)
       .def_readonly("cx", &g::StereoCamera::cx)
@@ -195,7 +214,8 @@ void bind_camera(py::module_& m) {
            "Points (N, 3) in frame c from left pixels and disparities u_l - u_r (NaN where <= 0).")
       .def("__repr__", [](const g::StereoCamera& c) {
         return "StereoCamera(fx=" + std::to_string(c.fx) + ", baseline=" +
-               std::to_string(c.baseline) + ", size=" + std::to_string(c.width) + "x" +
+               std::to_string(c.baseline) + ", disparity_offset=" +
+               std::to_string(c.disparity_offset) + ", size=" + std::to_string(c.width) + "x" +
                std::to_string(c.height) + ")";
       });
 }

@@ -21,14 +21,15 @@ void check_options(const StereoOptions& o) {
     throw std::invalid_argument("StereoOptions: " + what);
   };
   if (o.max_hamming < 0 || o.max_hamming > 256) fail("max_hamming must be in [0, 256]");
-  if (!(o.row_radius >= 0)) fail("row_radius must be >= 0");
+  // Upper bounds keep the float-to-int conversions of the search bands defined.
+  if (!(o.row_radius >= 0 && o.row_radius <= 64)) fail("row_radius must be in [0, 64] px");
   if (o.octave_tolerance < 0) fail("octave_tolerance must be >= 0");
   if (o.patch_radius < 1 || o.patch_radius > 15) fail("patch_radius must be in [1, 15]");
   if (o.patch_half_height < 0 || o.patch_half_height > 15)
     fail("patch_half_height must be in [0, 15]");
   if (o.refine_range < 1 || o.refine_range > 32) fail("refine_range must be in [1, 32]");
-  if (!(o.min_depth > 0) || !(o.max_depth > o.min_depth))
-    fail("need 0 < min_depth < max_depth");
+  if (!(o.min_depth > 0) || !(o.max_depth > o.min_depth) || !(o.max_depth <= 1e4))
+    fail("need 0 < min_depth < max_depth <= 10000 m");
   if (!(o.outlier_factor > 0)) fail("outlier_factor must be > 0");
   if (!(o.right_features_factor > 0) || !(o.right_features_factor <= 16))
     fail("right_features_factor must be in (0, 16]");
@@ -174,9 +175,12 @@ StereoMatches match_stereo(const Keypoints& left, const Keypoints& right,
     throw std::invalid_argument("match_stereo: keypoint octaves exceed the image's pyramid");
   const cv::Size size0 = gray_left.size();
 
+  // Disparities as measured in the images: the pair's offset (stereo_camera.hpp) is added only
+  // when a disparity becomes a depth, so the search windows are in image pixels.
   const double fb = camera.fx * camera.baseline;
-  const float min_disparity = static_cast<float>(fb / options.max_depth);
-  const float max_disparity = static_cast<float>(fb / options.min_depth);
+  const float offset = static_cast<float>(camera.disparity_offset);
+  const float min_disparity = static_cast<float>(fb / options.max_depth) - offset;
+  const float max_disparity = static_cast<float>(fb / options.min_depth) - offset;
   // v_right - v_left of a point at disparity d is (fy / fx) (t_right.y - t_left.y) / b * d
   // (exact for fronto-parallel offsets; the z offsets of KITTI's cameras are negligible):
   // on KITTI 0.005 d, i.e. 0.25 px at 8 m and 2 px at 1 m.
@@ -274,7 +278,7 @@ StereoMatches match_stereo(const Keypoints& left, const Keypoints& right,
       const float disparity = kl.pt.x - u_right;
       if (!(disparity >= min_disparity && disparity <= max_disparity)) continue;
       result.u_right[i] = u_right;
-      result.depth[i] = static_cast<float>(fb / disparity);
+      result.depth[i] = static_cast<float>(fb / (disparity + offset));
       cost[i] = ref.cost;
     }
   };

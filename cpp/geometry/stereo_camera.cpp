@@ -9,7 +9,7 @@
 namespace twistslam::geometry {
 
 StereoCamera StereoCamera::from_kitti(const Mat34& P_left, const Mat34& P_right, int width,
-                                      int height) {
+                                      int height, double disparity_offset) {
   const Mat3 K_left = P_left.leftCols<3>();
   const Mat3 K_right = P_right.leftCols<3>();
   if (!P_left.allFinite() || !P_right.allFinite() || K_left(0, 0) <= 0 || K_left(1, 1) <= 0) {
@@ -20,6 +20,11 @@ StereoCamera StereoCamera::from_kitti(const Mat34& P_left, const Mat34& P_right,
   if ((K_left - K_right).cwiseAbs().maxCoeff() > 1e-6 * K_left(0, 0)) {
     throw std::invalid_argument("StereoCamera.from_kitti: P_left and P_right have different "
                                 "intrinsics; the pair is not rectified");
+  }
+  // A few pixels at most: a larger one is a wrong calibration, not a rectification residual.
+  if (!std::isfinite(disparity_offset) || std::abs(disparity_offset) > 8.0) {
+    throw std::invalid_argument("StereoCamera.from_kitti: disparity_offset must be finite and "
+                                "within +-8 px, got " + std::to_string(disparity_offset));
   }
   if (width < 0 || height < 0) {
     throw std::invalid_argument("StereoCamera.from_kitti: negative image size");
@@ -38,6 +43,7 @@ StereoCamera StereoCamera::from_kitti(const Mat34& P_left, const Mat34& P_right,
   }
   cam.width = width;
   cam.height = height;
+  cam.disparity_offset = disparity_offset;
   return cam;
 }
 
@@ -55,7 +61,14 @@ Vec2 pinhole(const StereoCamera& c, const Vec3& X) {
 
 Vec2 StereoCamera::project(const Vec3& X_c) const { return pinhole(*this, X_c + t_left); }
 
-Vec2 StereoCamera::project_right(const Vec3& X_c) const { return pinhole(*this, X_c + t_right); }
+Vec2 StereoCamera::project_right(const Vec3& X_c) const {
+  return pinhole(*this, X_c + t_right) + Vec2(disparity_offset, 0.0);
+}
+
+double StereoCamera::depth_from_disparity(double disparity) const {
+  const double d = disparity + disparity_offset;
+  return d > 0 ? fx * baseline / d : -1.0;
+}
 
 Vec3 StereoCamera::backproject(const Vec2& uv, double depth) const {
   const Vec3 X_left((uv.x() - cx) * depth / fx, (uv.y() - cy) * depth / fy, depth);
@@ -63,10 +76,9 @@ Vec3 StereoCamera::backproject(const Vec2& uv, double depth) const {
 }
 
 Vec3 StereoCamera::triangulate(const Vec2& uv_left, double disparity) const {
-  if (!(disparity > 0)) {
-    return Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
-  }
-  return backproject(uv_left, fx * baseline / disparity);
+  const double depth = depth_from_disparity(disparity);
+  if (!(depth > 0)) return Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  return backproject(uv_left, depth);
 }
 
 bool StereoCamera::in_image(const Vec2& uv, double border) const {

@@ -28,7 +28,8 @@ inline bool predict_measurement(const geometry::StereoCamera& cam, const Vec3& X
   }
   (*z)(0) = cam.fx * Xl.x() * il + cam.cx;
   (*z)(1) = cam.fy * Xl.y() * il + cam.cy;
-  if constexpr (kRows == 3) (*z)(2) = cam.fx * Xr.x() * ir + cam.cx;
+  // the right image's principal point carries the pair's disparity offset (stereo_camera.hpp)
+  if constexpr (kRows == 3) (*z)(2) = cam.fx * Xr.x() * ir + cam.cx + cam.disparity_offset;
   if (J) {
     J->row(0) << cam.fx * il, 0.0, -cam.fx * Xl.x() * il * il;
     J->row(1) << 0.0, cam.fy * il, -cam.fy * Xl.y() * il * il;

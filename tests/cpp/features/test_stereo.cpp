@@ -269,3 +269,38 @@ TEST(StereoMatching, RejectsInvalidInput) {
   const StereoMatches none = match_stereo(Keypoints{}, r, s.left, s.right, s.cam);
   EXPECT_TRUE(none.depth.empty());
 }
+
+// A right image whose principal point sits 0.6 px right of the calibration's (as on real KITTI
+// colour pairs, docs/camera_scale.md) shortens every disparity by 0.6 px: uncorrected, far
+// depths come out several percent too long; the camera's disparity_offset removes the bias.
+TEST(StereoMatching, DisparityOffsetRemovesAShiftedRightPrincipalPoint) {
+  const RenderedPair& s = scene();
+  geometry::StereoCamera shifted = s.cam;
+  shifted.cx += 0.6;
+  const cv::Mat right = test::render(s.planes, shifted, true, nullptr, 1.0, 101);
+  const OrbExtractor orb(OrbOptions{});
+  // median depth / true depth on the farthest plane, and the bias 0.6 px predicts there
+  auto far_plane_ratio = [&](const geometry::StereoCamera& cam, double* predicted) {
+    const StereoFeatures f = extract_and_match(orb, s.left, right, cam);
+    std::vector<double> ratio, bias;
+    for (std::size_t i = 0; i < f.left.size(); ++i) {
+      const Truth t = truth(s, f.left.keypoints[i]);
+      if (!t.valid || t.plane != 2 || !(f.matches.depth[i] > 0)) continue;
+      ratio.push_back(f.matches.depth[i] / t.depth);
+      bias.push_back(t.disparity / (t.disparity - 0.6));
+    }
+    EXPECT_GT(ratio.size(), 30u);
+    if (predicted) *predicted = bias.empty() ? 0.0 : quantile(bias, 0.5);
+    return ratio.empty() ? 0.0 : quantile(ratio, 0.5);
+  };
+  geometry::StereoCamera corrected = s.cam;
+  corrected.disparity_offset = 0.6;
+  double predicted = 0;
+  const double uncorrected = far_plane_ratio(s.cam, &predicted);
+  const double fixed = far_plane_ratio(corrected, nullptr);
+  std::cout << "[ stereo ] far plane depth ratio: predicted bias " << predicted
+            << ", uncorrected " << uncorrected << ", corrected " << fixed << "\n";
+  EXPECT_GT(predicted, 1.01);
+  EXPECT_GT(uncorrected - 1.0, 0.7 * (predicted - 1.0));
+  EXPECT_LT(std::abs(fixed - 1.0), 0.25 * (predicted - 1.0));
+}

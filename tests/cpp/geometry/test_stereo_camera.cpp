@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <stdexcept>
 
 #include "geometry/stereo_camera.hpp"
@@ -53,4 +54,22 @@ TEST(StereoCamera, RejectsUnrectifiedPair) {
   P3(0, 0) += 5.0;
   EXPECT_THROW(StereoCamera::from_kitti(kitti_p2(), P3, 1242, 375), std::invalid_argument);
   EXPECT_THROW(StereoCamera::from_kitti(kitti_p3(), kitti_p2(), 1242, 375), std::invalid_argument);
+}
+
+TEST(StereoCamera, DisparityOffsetMovesTheRightPrincipalPoint) {
+  const auto cam = StereoCamera::from_kitti(kitti_p2(), kitti_p3(), 1242, 375, 0.6);
+  EXPECT_DOUBLE_EQ(cam.disparity_offset, 0.6);
+  const auto plain = StereoCamera::from_kitti(kitti_p2(), kitti_p3(), 1242, 375);
+  const Vec3 X(-3.0, 1.2, 25.0);
+  // the right image sees every point 0.6 px further right, the left image is unchanged
+  EXPECT_NEAR(cam.project_right(X).x() - plain.project_right(X).x(), 0.6, 1e-12);
+  EXPECT_LT((cam.project(X) - plain.project(X)).norm(), 1e-12);
+  // triangulation from the measured (shortened) disparity recovers the point
+  const Vec2 l = cam.project(X), r = cam.project_right(X);
+  EXPECT_LT((cam.triangulate(l, l.x() - r.x()) - X).norm(), 1e-4 * X.z());
+  EXPECT_NEAR(cam.depth_from_disparity(-0.6), -1.0, 0);  // no depth at d + offset <= 0
+  EXPECT_THROW(StereoCamera::from_kitti(kitti_p2(), kitti_p3(), 1242, 375, 20.0),
+               std::invalid_argument);
+  EXPECT_THROW(StereoCamera::from_kitti(kitti_p2(), kitti_p3(), 1242, 375, std::nan("")),
+               std::invalid_argument);
 }
