@@ -11,6 +11,7 @@ void bind_features(py::module_& m);
 void bind_optim(py::module_& m);
 void bind_slam(py::module_& m);
 void bind_objects(py::module_& m);
+void bind_lidar(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -28,4 +29,6 @@ PYBIND11_MODULE(_core, m) {
   twistslam::bindings::bind_slam(slam);
   py::module_ objects = m.def_submodule("objects", "object tracks, association, the 3D tracker");
   twistslam::bindings::bind_objects(objects);
+  py::module_ lidar = m.def_submodule("lidar", "LiDAR depth of keypoints, KITTI scan correction");
+  twistslam::bindings::bind_lidar(lidar);
 }

@@ -35,6 +35,10 @@ TEST(ScanProjection, DropsAndCountsNonFinitePoints) {
   const auto cam = kitti_camera();
   Points3 wall = scan_lines(cam, 300, 900, 100, 300, [](double, double) { return 30.0; });
   const auto clean = project_scan(wall, cam, {});
+  ASSERT_EQ(clean.returns.size(), static_cast<std::size_t>(wall.rows()));  // all in the image
+  std::vector<int> seen(wall.rows(), 0);
+  for (const ProjectedReturn& r : clean.returns) ++seen[r.index];
+  for (const int s : seen) ASSERT_EQ(s, 1);
   wall(3, 0) = NAN;
   wall(10, 2) = INFINITY;
   wall(11, 1) = -NAN;
