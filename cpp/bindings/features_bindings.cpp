@@ -6,15 +6,15 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <functional>
 #include <limits>
-#include <map>
+#include <stdexcept>
 #include <string>
-#include <type_traits>
 
 #include "bindings/numpy_checks.hpp"
+#include "bindings/options_table.hpp"
 #include "features/orb.hpp"
 #include "features/stereo.hpp"
+#include "features/stereo_option_ranges.hpp"
 #include "geometry/stereo_camera.hpp"
 
 namespace twistslam::bindings {
@@ -79,79 +79,26 @@ ImageView wrap_mask(const py::handle& obj, const cv::Size& size) {
   return v;
 }
 
-// Option names -> setters; values are converted with Python's int() / float().
-using Setter = std::function<void(const py::object&)>;
-
-template <typename T>
-Setter field(T* target) {
-  return [target](const py::object& value) {
-    if (py::isinstance<py::bool_>(value) || !(py::isinstance<py::int_>(value) ||
-                                              py::isinstance<py::float_>(value) ||
-                                              py::hasattr(value, "__index__") ||
-                                              py::hasattr(value, "__float__")))
-      throw py::value_error("expected a number, got " + std::string(py::str(py::type::of(value))));
-    if constexpr (std::is_integral_v<T>) {
-      const double d = py::float_(value);
-      if (d != std::floor(d)) throw py::value_error("expected an integer, got " + std::to_string(d));
-      *target = static_cast<T>(py::int_(value));
-    } else {
-      *target = static_cast<T>(py::float_(value).cast<double>());
-    }
-  };
-}
-
-std::map<std::string, Setter> orb_fields(f::OrbOptions& o) {
-  return {{"num_features", field(&o.num_features)},
-          {"scale_factor", field(&o.scale_factor)},
-          {"num_levels", field(&o.num_levels)},
-          {"fast_threshold", field(&o.fast_threshold)},
-          {"min_fast_threshold", field(&o.min_fast_threshold)},
-          {"cell_size", field(&o.cell_size)}};
-}
-
-std::map<std::string, Setter> stereo_fields(f::StereoOptions& o) {
-  return {{"max_hamming", field(&o.max_hamming)},
-          {"row_radius", field(&o.row_radius)},
-          {"octave_tolerance", field(&o.octave_tolerance)},
-          {"patch_radius", field(&o.patch_radius)},
-          {"patch_half_height", field(&o.patch_half_height)},
-          {"refine_range", field(&o.refine_range)},
-          {"min_depth", field(&o.min_depth)},
-          {"max_depth", field(&o.max_depth)},
-          {"outlier_factor", field(&o.outlier_factor)},
-          {"right_features_factor", field(&o.right_features_factor)}};
-}
-
-// Applies `options` (a dict or None) then `kwargs`; unknown names raise ValueError.
+// Applies `options` (a dict or None) then `kwargs` to the ORB (and stereo) options, through
+// the tables of options_table.hpp: ranges from for_each_option, ValueError for an unknown
+// dict key or a value out of range, TypeError for an unknown keyword or a wrong type.
 void apply_options(const char* fn, const py::object& options, const py::kwargs& kwargs,
                    f::OrbOptions* orb, f::StereoOptions* stereo) {
-  std::map<std::string, Setter> fields = orb_fields(*orb);
-  if (stereo) fields.merge(stereo_fields(*stereo));
-  auto apply = [&](const py::dict& d) {
-    for (auto item : d) {
-      const std::string key = py::str(item.first);
-      auto it = fields.find(key);
-      if (it == fields.end()) {
-        std::string valid;
-        for (const auto& kv : fields) valid += (valid.empty() ? "" : ", ") + kv.first;
-        throw py::value_error(std::string(fn) + ": unknown option '" + key + "' (valid: " +
-                              valid + ")");
-      }
-      try {
-        it->second(py::reinterpret_borrow<py::object>(item.second));
-      } catch (const py::error_already_set& e) {
-        throw py::value_error(std::string(fn) + ": option '" + key + "': " + e.what());
-      } catch (const py::value_error& e) {
-        throw py::value_error(std::string(fn) + ": option '" + key + "': " + e.what());
-      }
-    }
-  };
+  FieldTable fields = field_table(*orb);
+  if (stereo) fields.merge(field_table(*stereo));
   if (!options.is_none()) {
     if (!py::isinstance<py::dict>(options))
-      throw py::value_error(std::string(fn) + ": options must be a dict or None");
-    apply(options.cast<py::dict>());
+      throw py::type_error(std::string(fn) + ": options must be a dict or None");
+    apply_section(options.cast<py::dict>(), "", fields);
   }
-  apply(kwargs);
+  apply_keywords(kwargs, fn, fields);
+  try {
+    f::check_options(*orb);
+    if (stereo && !(stereo->min_depth < stereo->max_depth))
+      throw std::invalid_argument("min_depth must be below max_depth");
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(std::string(fn) + ": " + e.what());
+  }
 }
 
 template <typename T>
@@ -250,19 +197,23 @@ py::dict match_stereo(const py::handle& image_left, const py::handle& image_righ
 }
 
 py::dict default_options() {
-  const f::OrbOptions o;
-  const f::StereoOptions s;
+  f::OrbOptions orb;
+  f::StereoOptions stereo;
+  py::dict out = dump_section(field_table(orb));
+  for (const auto& item : dump_section(field_table(stereo))) out[item.first] = item.second;
   // float fields as the decimal they were written as (1.2, not 1.2000000476837158)
-  auto tidy = [](float x) { return std::stod(std::to_string(x)); };
-  return py::dict("num_features"_a = o.num_features, "scale_factor"_a = tidy(o.scale_factor),
-                  "num_levels"_a = o.num_levels, "fast_threshold"_a = o.fast_threshold,
-                  "min_fast_threshold"_a = o.min_fast_threshold, "cell_size"_a = o.cell_size,
-                  "max_hamming"_a = s.max_hamming, "row_radius"_a = tidy(s.row_radius),
-                  "octave_tolerance"_a = s.octave_tolerance, "patch_radius"_a = s.patch_radius,
-                  "patch_half_height"_a = s.patch_half_height,
-                  "refine_range"_a = s.refine_range, "min_depth"_a = tidy(s.min_depth),
-                  "max_depth"_a = tidy(s.max_depth), "outlier_factor"_a = tidy(s.outlier_factor),
-                  "right_features_factor"_a = tidy(s.right_features_factor));
+  for (const auto& item : out)
+    if (py::isinstance<py::float_>(item.second))
+      out[item.first] = std::stod(std::to_string(item.second.cast<float>()));
+  return out;
+}
+
+py::dict option_ranges() {
+  f::OrbOptions orb;
+  f::StereoOptions stereo;
+  py::dict out = dump_ranges(field_table(orb));
+  for (const auto& item : dump_ranges(field_table(stereo))) out[item.first] = item.second;
+  return out;
 }
 
 py::array_t<std::int32_t> hamming_distance(const py::handle& a_obj, const py::handle& b_obj) {
@@ -299,7 +250,7 @@ image : (H, W) or (H, W, 3) uint8 ndarray
     pixels of each row are packed.
 options : dict, optional
     ORB options (see ``default_options()``): num_features (2000), scale_factor (1.2),
-    num_levels (8), fast_threshold (20), min_fast_threshold (7), cell_size (35 px).
+    num_levels (4), fast_threshold (20), min_fast_threshold (7), cell_size (35 px).
 mask : (H, W) bool or uint8 ndarray, optional
     Zero / False where no keypoint may lie (e.g. a priori dynamic classes).
 **kwargs
@@ -319,7 +270,10 @@ Raises
 ------
 ValueError
     If the image is not uint8 (H, W) / (H, W, 3), is empty, the mask does not match, or an
-    option is unknown or out of range. A blank image gives N = 0.
+    option key of ``options`` is unknown or a value out of range (see ``option_ranges``).
+    A blank image gives N = 0.
+TypeError
+    An unknown keyword, or an option value of the wrong type (a float for an integer).
 )doc");
 
   m.def("match_stereo", &match_stereo, "image_left"_a, "image_right"_a, "camera"_a,
@@ -364,7 +318,9 @@ Raises
 ------
 ValueError
     On a bad image (dtype, shape, empty), images of different sizes, a camera of another
-    image size, a bad mask, or an unknown / out-of-range option.
+    image size, a bad mask, or an unknown ``options`` key or out-of-range value.
+TypeError
+    An unknown keyword, a camera that is not a StereoCamera, an option of the wrong type.
 )doc");
 
   m.def("default_options", &default_options,
@@ -374,6 +330,16 @@ Returns
 -------
 dict
     Every option ``extract_orb`` and ``match_stereo`` accept, with its default value.
+)doc");
+
+  m.def("option_ranges", &option_ranges,
+        R"doc(Valid range of every ORB and stereo option.
+
+Returns
+-------
+dict
+    ``{key: (lo, hi)}``, inclusive, in each option's unit; ``match_stereo`` also needs
+    ``min_depth < max_depth`` and ``extract_orb`` ``min_fast_threshold <= fast_threshold``.
 )doc");
 
   m.def("hamming_distance", &hamming_distance, "a"_a, "b"_a,

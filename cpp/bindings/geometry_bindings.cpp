@@ -32,9 +32,15 @@ w : (3,) array_like
 Returns
 -------
 (3, 3) ndarray
+
+Raises
+------
+ValueError
+    If w is not of shape (3,) or holds NaN or Inf (as every twist argument of this module).
 )doc");
-  m.def("so3_log", [](py::handle R) { return to_numpy(g::so3_log(as_mat3(R, "R"))); }, "R"_a,
-        "Rotation vector (3,) of a rotation matrix (3, 3), angle in [0, pi]; accurate near pi.");
+  m.def("so3_log", [](py::handle R) { return to_numpy(g::so3_log(as_rotation(R, "R"))); }, "R"_a,
+        "Rotation vector (3,) of a rotation matrix (3, 3), angle in [0, pi]; accurate near pi.\n"
+        "ValueError unless R is finite and a rotation (R^T R = I within 1e-4, det R > 0).");
   m.def("so3_left_jacobian",
         [](py::handle w) { return to_numpy(g::so3_left_jacobian(as_vec3(w, "w"))); }, "w"_a,
         "Left Jacobian J_l(w) (3, 3): exp(w + d) ~= exp(J_l d) exp(w).");
@@ -60,17 +66,24 @@ Returns
 -------
 (4, 4) ndarray
     The rigid transform exp(xi^).
+
+Raises
+------
+ValueError
+    If xi is not of shape (6,) or holds NaN or Inf.
 )doc");
-  m.def("se3_log", [](py::handle T) { return to_numpy(g::se3_log(as_mat4(T, "T"))); }, "T"_a,
-        "Twist (6,) [v; w] of a rigid transform (4, 4); rotation angle in [0, pi].");
-  m.def("se3_inverse", [](py::handle T) { return to_numpy(g::se3_inverse(as_mat4(T, "T"))); },
+  m.def("se3_log", [](py::handle T) { return to_numpy(g::se3_log(as_rigid_transform(T, "T"))); }, "T"_a,
+        "Twist (6,) [v; w] of a rigid transform (4, 4); rotation angle in [0, pi].\n"
+        "ValueError unless T is finite and rigid (R^T R = I within 1e-4, det R > 0, last row\n"
+        "[0, 0, 0, 1]); every function taking a transform checks the same.");
+  m.def("se3_inverse", [](py::handle T) { return to_numpy(g::se3_inverse(as_rigid_transform(T, "T"))); },
         "T"_a, "Inverse (4, 4) of a rigid transform, using R^T.");
   m.def("se3_compose",
         [](py::handle A, py::handle B) {
-          return to_numpy(Mat4(as_mat4(A, "A") * as_mat4(B, "B")));
+          return to_numpy(Mat4(as_rigid_transform(A, "A") * as_rigid_transform(B, "B")));
         },
         "A"_a, "B"_a, "Composition A @ B of two rigid transforms (4, 4).");
-  m.def("se3_adjoint", [](py::handle T) { return to_numpy(g::se3_adjoint(as_mat4(T, "T"))); },
+  m.def("se3_adjoint", [](py::handle T) { return to_numpy(g::se3_adjoint(as_rigid_transform(T, "T"))); },
         "T"_a, "Adjoint (6, 6) for [v; w] twists: exp(Ad(T) xi) = T exp(xi) T^-1.");
   m.def("se3_left_jacobian",
         [](py::handle xi) { return to_numpy(g::se3_left_jacobian(as_vec6(xi, "xi"))); }, "xi"_a,
@@ -86,12 +99,12 @@ Returns
         "xi"_a, "Inverse of the SE(3) right Jacobian (6, 6).");
   m.def("twist_between",
         [](py::handle A, py::handle B) {
-          return to_numpy(g::twist_between(as_mat4(A, "T_a"), as_mat4(B, "T_b")));
+          return to_numpy(g::twist_between(as_rigid_transform(A, "T_a"), as_rigid_transform(B, "T_b")));
         },
         "T_a"_a, "T_b"_a, "Twist xi (6,) with T_b = exp(xi) T_a (left, world-frame increment).");
   m.def("transform_points",
         [](py::handle T, py::handle X) {
-          const Mat4 M = as_mat4(T, "T");
+          const Mat4 M = as_rigid_transform(T, "T");
           const DoubleArray pts = as_rows(X, "points", 3);
           DoubleArray out = new_array({pts.shape(0), 3});
           Eigen::Map<Points3> dst(out.mutable_data(), pts.shape(0), 3);
@@ -100,6 +113,24 @@ Returns
           return out;
         },
         "T"_a, "points"_a, "Points (N, 3) mapped by the rigid transform T (4, 4): T @ X.");
+  m.def("predict_constant_velocity",
+        [](py::handle A, py::handle B) {
+          return to_numpy(g::predict_constant_velocity(as_rigid_transform(A, "T_previous"),
+                                                       as_rigid_transform(B, "T_last")));
+        },
+        "T_previous"_a, "T_last"_a, R"doc(Constant-velocity prediction of the next pose.
+
+Parameters
+----------
+T_previous, T_last : (4, 4) array_like
+    The last two poses (rigid transforms, both T_w_c or both T_c_w).
+
+Returns
+-------
+(4, 4) ndarray
+    ``T_last @ inv(T_previous) @ T_last``: the last motion applied once more, as the SLAM
+    core predicts the next camera pose.
+)doc");
 }
 
 void bind_links(py::module_& m) {

@@ -1,5 +1,5 @@
-// twistslam._core: the C++ core. One submodule per C++ module (geometry now; features,
-// tracking, lidar, shape and optim as they land).
+// twistslam._core: the C++ core, one submodule per C++ module. Python code uses it through
+// the typed facades twistslam.geometry, .features, .optim, .slam and .objects.
 #include <pybind11/stl.h>
 
 #include "bindings/numpy_checks.hpp"
@@ -10,6 +10,7 @@ void bind_geometry(py::module_& m);
 void bind_features(py::module_& m);
 void bind_optim(py::module_& m);
 void bind_slam(py::module_& m);
+void bind_slam_options(py::module_& m);
 void bind_objects(py::module_& m);
 void bind_lidar(py::module_& m);
 }
@@ -27,6 +28,7 @@ PYBIND11_MODULE(_core, m) {
   twistslam::bindings::bind_optim(optim);
   py::module_ slam = m.def_submodule("slam", "the stereo SLAM system");
   twistslam::bindings::bind_slam(slam);
+  twistslam::bindings::bind_slam_options(slam);
   py::module_ objects = m.def_submodule("objects", "object tracks, association, the 3D tracker");
   twistslam::bindings::bind_objects(objects);
   py::module_ lidar = m.def_submodule("lidar", "LiDAR depth of keypoints, KITTI scan correction");

@@ -1,6 +1,10 @@
 #include "bindings/numpy_checks.hpp"
 
+#include <cmath>
 #include <sstream>
+
+#include "geometry/se3.hpp"
+#include "geometry/so3.hpp"
 
 namespace twistslam::bindings {
 
@@ -46,10 +50,31 @@ Eigen::Matrix<double, R, C> as_fixed(const py::handle& obj, const char* name) {
   }
   Eigen::Matrix<double, R, C> M;
   for (int i = 0; i < R; ++i)
-    for (int j = 0; j < C; ++j) M(i, j) = a.data()[i * C + j];
+    for (int j = 0; j < C; ++j) {
+      M(i, j) = a.data()[i * C + j];
+      if (!std::isfinite(M(i, j)))
+        throw py::value_error(std::string(name) + ": contains NaN or Inf at [" + std::to_string(i) +
+                              (C == 1 ? "" : ", " + std::to_string(j)) + "]");
+    }
   return M;
 }
+
 }  // namespace
+
+Mat4 as_rigid_transform(const py::handle& obj, const char* name) {
+  const Mat4 T = as_fixed<4, 4>(obj, name);
+  const std::string problem = geometry::rigid_transform_problem(T, kRigidTolerance);
+  if (!problem.empty())
+    throw py::value_error(std::string(name) + ": not a rigid transform [R t; 0 0 0 1]: " + problem);
+  return T;
+}
+
+Mat3 as_rotation(const py::handle& obj, const char* name) {
+  const Mat3 R = as_fixed<3, 3>(obj, name);
+  const std::string problem = geometry::rotation_problem(R, kRigidTolerance);
+  if (!problem.empty()) throw py::value_error(std::string(name) + ": not a rotation: " + problem);
+  return R;
+}
 
 Mat4 as_mat4(const py::handle& o, const char* n) { return as_fixed<4, 4>(o, n); }
 Mat34 as_mat34(const py::handle& o, const char* n) { return as_fixed<3, 4>(o, n); }

@@ -24,12 +24,26 @@ std::string shape_string(const py::array& a);
 DoubleArray as_rows(const py::handle& obj, const char* name, py::ssize_t cols);
 
 // Fixed-size arrays: a (rows, cols) matrix or, with cols == 0, a vector of length rows.
+// Every value must be finite: ValueError "name: contains NaN or Inf at [i, j]" (a NaN twist
+// or projection matrix has no meaning, and NaN propagates silently through everything after).
 Mat4 as_mat4(const py::handle& obj, const char* name);
 Mat34 as_mat34(const py::handle& obj, const char* name);
 Mat3 as_mat3(const py::handle& obj, const char* name);
 Mat6 as_mat6(const py::handle& obj, const char* name);
 Vec3 as_vec3(const py::handle& obj, const char* name);
 Vec6 as_vec6(const py::handle& obj, const char* name);
+
+// Largest deviation from a rotation or rigid transform that is still accepted: |R^T R - I|
+// (max entry) and the last row's offset from [0, 0, 0, 1]. Poses read from text
+// files with 6 significant digits are off by ~1e-6; a scale, shear or reflection is off by
+// 0.1 or more.
+inline constexpr double kRigidTolerance = 1e-4;
+
+// A (4, 4) rigid transform [R t; 0 0 0 1] / a (3, 3) rotation, within kRigidTolerance; else
+// ValueError naming `name` and what is wrong ("T: not a rigid transform: R^T R differs from I
+// by 8").
+Mat4 as_rigid_transform(const py::handle& obj, const char* name);
+Mat3 as_rotation(const py::handle& obj, const char* name);
 
 // Eigen view of an (N, 3) float64 array, no copy.
 inline Eigen::Map<const Points3> points_view(const DoubleArray& a) {

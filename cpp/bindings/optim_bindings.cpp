@@ -5,12 +5,12 @@
 
 #include <cmath>
 #include <cstdint>
-#include <functional>
-#include <map>
 #include <string>
 #include <vector>
 
 #include "bindings/numpy_checks.hpp"
+#include "bindings/options_table.hpp"
+#include "geometry/se3.hpp"
 #include "geometry/stereo_camera.hpp"
 #include "optim/bundle_adjustment.hpp"
 #include "optim/pose_optimization.hpp"
@@ -80,63 +80,49 @@ std::vector<int> as_indices(const py::handle& obj, const char* name, py::ssize_t
   return out;
 }
 
-// **options -> fields of an options struct; unknown names raise TypeError like Python does.
-class OptionSetter {
- public:
-  explicit OptionSetter(std::string function) : function_(std::move(function)) {}
-  OptionSetter& add_int(const std::string& name, int* field, int min_value) {
-    setters_[name] = [=](const py::handle& v) {
-      const int x = v.cast<int>();
-      if (x < min_value) {
-        throw py::value_error(name + ": must be >= " + std::to_string(min_value) + ", got " +
-                              std::to_string(x));
-      }
-      *field = x;
-    };
-    return *this;
-  }
-  OptionSetter& add_double(const std::string& name, double* field, bool allow_zero = false) {
-    setters_[name] = [=](const py::handle& v) {
-      const double x = v.cast<double>();
-      if (!std::isfinite(x) || x < 0 || (!allow_zero && x == 0)) {
-        throw py::value_error(name + ": must be finite and " + (allow_zero ? ">= 0" : "> 0") +
-                              ", got " + std::to_string(x));
-      }
-      *field = x;
-    };
-    return *this;
-  }
-  OptionSetter& add_bool(const std::string& name, bool* field) {
-    setters_[name] = [=](const py::handle& v) { *field = v.cast<bool>(); };
-    return *this;
-  }
-  OptionSetter& add(const std::string& name, std::function<void(const py::handle&)> f) {
-    setters_[name] = std::move(f);
-    return *this;
-  }
-  void apply(const py::kwargs& kwargs) const {
-    for (const auto& item : kwargs) {
-      const std::string key = py::str(item.first);
-      auto it = setters_.find(key);
-      if (it == setters_.end()) {
-        std::string known;
-        for (const auto& s : setters_) known += (known.empty() ? "" : ", ") + s.first;
-        throw py::type_error(function_ + "() got an unexpected keyword argument '" + key +
-                             "' (options: " + known + ")");
-      }
-      try {
-        it->second(item.second);
-      } catch (const py::cast_error&) {
-        throw py::type_error(key + ": wrong type " +
-                             std::string(py::str(py::type::of(item.second))));
-      }
-    }
-  }
+// **options of optimize_pose, with the range of each (inclusive, the option's unit). A gate
+// or Huber kink of 0 is undefined, so those start just above 0; the upper bounds lie far past
+// any useful value (1e4 is a 100-sigma gate, 1000 iterations "until converged").
+FieldTable pose_option_fields(o::PoseOptimizationOptions& opt) {
+  return {{"rounds", set(&opt.rounds, 0, 100)},
+          {"iterations_per_round", set(&opt.iterations_per_round, 0, 1000)},
+          {"chi2_stereo", set(&opt.chi2_stereo, 1e-6, 1e4)},
+          {"chi2_mono", set(&opt.chi2_mono, 1e-6, 1e4)},
+          {"huber_delta_stereo", set(&opt.huber_delta_stereo, 1e-6, 1e3)},
+          {"huber_delta_mono", set(&opt.huber_delta_mono, 1e-6, 1e3)},
+          {"min_depth", set(&opt.min_depth, 0.0, 1e3)},  // m
+          {"min_inliers", set(&opt.min_inliers, 0, 1000000)}};
+}
 
- private:
-  std::string function_;
-  std::map<std::string, std::function<void(const py::handle&)>> setters_;
-};
+o::BALinearSolver linear_solver_from_string(const std::string& s) {
+  if (s == "auto") return o::BALinearSolver::kAuto;
+  if (s == "dense_schur") return o::BALinearSolver::kDenseSchur;
+  if (s == "sparse_schur") return o::BALinearSolver::kSparseSchur;
+  if (s == "iterative_schur") return o::BALinearSolver::kIterativeSchur;
+  throw py::value_error("expected 'auto', 'dense_schur', 'sparse_schur' or 'iterative_schur', got '" + s + "'");
+}
+
+// **options of bundle_adjust (ranges as pose_option_fields).
+FieldTable ba_option_fields(o::BundleAdjustmentOptions& opt) {
+  return {{"max_iterations_first", set(&opt.max_iterations_first, 0, 1000)},
+          {"max_iterations_second", set(&opt.max_iterations_second, 0, 1000)},
+          {"huber_delta_stereo", set(&opt.huber_delta_stereo, 1e-6, 1e3)},
+          {"huber_delta_mono", set(&opt.huber_delta_mono, 1e-6, 1e3)},
+          {"chi2_stereo", set(&opt.chi2_stereo, 1e-6, 1e4)},
+          {"chi2_mono", set(&opt.chi2_mono, 1e-6, 1e4)},
+          {"remove_outliers", set(&opt.remove_outliers)},
+          {"num_threads", set(&opt.num_threads, 1, 256)},
+          {"min_depth", set(&opt.min_depth, 0.0, 1e3)},  // m
+          {"function_tolerance", set(&opt.function_tolerance, 1e-16, 1.0)},  // relative
+          {"initial_trust_region_radius", set(&opt.initial_trust_region_radius, 1e-6, 1e16)},
+          {"linear_solver",
+           custom([&opt](const py::handle& v) {
+                    if (!py::isinstance<py::str>(v))
+                      throw py::type_error("expected a str, got " + std::string(py::str(py::type::of(v))));
+                    opt.linear_solver = linear_solver_from_string(v.cast<std::string>());
+                  },
+                  [] { return py::none(); })}};
+}
 
 py::array_t<bool> to_bool_array(const std::vector<std::uint8_t>& flags) {
   py::array_t<bool> out(static_cast<py::ssize_t>(flags.size()));
@@ -148,7 +134,7 @@ py::dict optimize_pose_py(const py::handle& T_init, const py::handle& points_w,
                           const py::handle& uv, const py::handle& u_right,
                           const py::handle& inv_sigma2, const g::StereoCamera& cam,
                           const py::kwargs& kwargs) {
-  const Mat4 T0 = as_mat4(T_init, "T_c_w_init");
+  const Mat4 T0 = as_rigid_transform(T_init, "T_c_w_init");
   const DoubleArray P = as_rows(points_w, "points_w", 3);
   const py::ssize_t n = P.shape(0);
   const DoubleArray px = as_rows(uv, "uv", 2);
@@ -160,16 +146,7 @@ py::dict optimize_pose_py(const py::handle& T_init, const py::handle& points_w,
   const std::vector<double> info = as_vector(inv_sigma2, "inv_sigma2", n, 1.0);
 
   o::PoseOptimizationOptions opt;
-  OptionSetter("optimize_pose")
-      .add_int("rounds", &opt.rounds, 0)
-      .add_int("iterations_per_round", &opt.iterations_per_round, 0)
-      .add_double("chi2_stereo", &opt.chi2_stereo)
-      .add_double("chi2_mono", &opt.chi2_mono)
-      .add_double("huber_delta_stereo", &opt.huber_delta_stereo)
-      .add_double("huber_delta_mono", &opt.huber_delta_mono)
-      .add_double("min_depth", &opt.min_depth, true)
-      .add_int("min_inliers", &opt.min_inliers, 0)
-      .apply(kwargs);
+  apply_keywords(kwargs, "optimize_pose", pose_option_fields(opt));
 
   std::vector<o::StereoObservation> obs(static_cast<size_t>(n));
   for (py::ssize_t i = 0; i < n; ++i) {
@@ -217,30 +194,7 @@ py::dict bundle_adjust_py(const py::handle& poses, const py::handle& fixed_poses
   const std::vector<double> info = as_vector(inv_sigma2, "inv_sigma2", E, 1.0);
 
   o::BundleAdjustmentOptions opt;
-  OptionSetter("bundle_adjust")
-      .add_int("max_iterations_first", &opt.max_iterations_first, 0)
-      .add_int("max_iterations_second", &opt.max_iterations_second, 0)
-      .add_double("huber_delta_stereo", &opt.huber_delta_stereo)
-      .add_double("huber_delta_mono", &opt.huber_delta_mono)
-      .add_double("chi2_stereo", &opt.chi2_stereo)
-      .add_double("chi2_mono", &opt.chi2_mono)
-      .add_bool("remove_outliers", &opt.remove_outliers)
-      .add_int("num_threads", &opt.num_threads, 1)
-      .add_double("min_depth", &opt.min_depth, true)
-      .add_double("function_tolerance", &opt.function_tolerance)
-      .add_double("initial_trust_region_radius", &opt.initial_trust_region_radius)
-      .add("linear_solver",
-           [&opt](const py::handle& v) {
-             const std::string s = v.cast<std::string>();
-             if (s == "auto") opt.linear_solver = o::BALinearSolver::kAuto;
-             else if (s == "dense_schur") opt.linear_solver = o::BALinearSolver::kDenseSchur;
-             else if (s == "sparse_schur") opt.linear_solver = o::BALinearSolver::kSparseSchur;
-             else if (s == "iterative_schur") opt.linear_solver = o::BALinearSolver::kIterativeSchur;
-             else
-               throw py::value_error("linear_solver: expected 'auto', 'dense_schur', "
-                                     "'sparse_schur' or 'iterative_schur', got '" + s + "'");
-           })
-      .apply(kwargs);
+  apply_keywords(kwargs, "bundle_adjust", ba_option_fields(opt));
 
   o::BAProblem problem;
   problem.keyframes.resize(static_cast<size_t>(K));
@@ -248,6 +202,9 @@ py::dict bundle_adjust_py(const py::handle& poses, const py::handle& fixed_poses
     auto& kf = problem.keyframes[static_cast<size_t>(k)];
     for (int i = 0; i < 4; ++i)
       for (int j = 0; j < 4; ++j) kf.T_c_w(i, j) = T.data()[16 * k + 4 * i + j];
+    const std::string problem_text = geometry::rigid_transform_problem(kf.T_c_w, kRigidTolerance);
+    if (!problem_text.empty())
+      throw py::value_error("poses_c_w[" + std::to_string(k) + "]: not a rigid transform: " + problem_text);
     kf.fixed = kf_fixed[static_cast<size_t>(k)];
   }
   problem.points.resize(static_cast<size_t>(M));
@@ -337,8 +294,12 @@ dict
 Raises
 ------
 ValueError
-    Wrong array shapes or option values. Non-finite data never raises: such observations
-    are outliers, a bad initial pose gives ``converged=False``.
+    Wrong array shapes, an option value out of range, or a ``T_c_w_init`` that is not a
+    finite rigid transform (R^T R = I within 1e-4, det R > 0, last row [0, 0, 0, 1]).
+    Non-finite observations never raise: they are outliers. A pose that sees every point
+    behind it gives ``converged=False``.
+TypeError
+    An unknown option or an option value of the wrong type.
 )doc");
 
   m.def("bundle_adjust", &bundle_adjust_py, "poses_c_w"_a, "fixed_poses"_a, "points_w"_a,
@@ -391,8 +352,11 @@ dict
 Raises
 ------
 ValueError
-    Wrong shapes, an index out of range (naming ``obs_keyframe`` / ``obs_point``), or bad
-    option values.
+    Wrong shapes, an index out of range (naming ``obs_keyframe`` / ``obs_point``), a pose
+    that is not a finite rigid transform (naming ``poses_c_w[k]``), or an option value out of
+    range. Non-finite points and observations are outliers, not errors.
+TypeError
+    An unknown option or an option value of the wrong type.
 )doc");
 }
 

@@ -1,60 +1,43 @@
-// Nested Python dict -> SlamOptions. Every key must be known (typos are errors, not silently
-// ignored defaults); missing keys keep the C++ default.
+// Nested Python dict -> SlamOptions through the field tables of options_table.hpp, built from
+// each section's for_each_option list (names and ranges defined once, in C++), then the
+// core's own tracking::check_options (ranges again, and the checks across fields).
 #include "bindings/slam_options.hpp"
+
+#include <stdexcept>
 
 #include "bindings/options_table.hpp"
 
 namespace twistslam::bindings {
+using namespace pybind11::literals;
 
 namespace {
 // Every option field of `o`, by section and key.
-std::map<std::string, std::map<std::string, Field>> option_table(tracking::SlamOptions& o) {
-  return {
-      {"orb",
-       {{"num_features", set(&o.orb.num_features)}, {"scale_factor", set(&o.orb.scale_factor)},
-        {"num_levels", set(&o.orb.num_levels)}, {"fast_threshold", set(&o.orb.fast_threshold)},
-        {"min_fast_threshold", set(&o.orb.min_fast_threshold)}, {"cell_size", set(&o.orb.cell_size)}}},
-      {"stereo",
-       {{"max_hamming", set(&o.stereo.max_hamming)}, {"patch_radius", set(&o.stereo.patch_radius)},
-        {"refine_range", set(&o.stereo.refine_range)}, {"min_depth", set(&o.stereo.min_depth)},
-        {"max_depth", set(&o.stereo.max_depth)}, {"row_radius", set(&o.stereo.row_radius)},
-        {"octave_tolerance", set(&o.stereo.octave_tolerance)},
-        {"patch_half_height", set(&o.stereo.patch_half_height)},
-        {"outlier_factor", set(&o.stereo.outlier_factor)},
-        {"right_features_factor", set(&o.stereo.right_features_factor)}}},
-      {"tracking",
-       {{"min_inliers", set(&o.tracking.min_inliers)}, {"min_init_points", set(&o.tracking.min_init_points)},
-        {"search_radius_px", set(&o.tracking.search_radius_px)},
-        {"local_map_search_radius_px", set(&o.tracking.local_map_search_radius_px)},
-        {"max_hamming", set(&o.tracking.max_hamming)}, {"ratio_test", set(&o.tracking.ratio_test)},
-        {"pose_rounds", set(&o.tracking.pose_rounds)}, {"chi2_stereo", set(&o.tracking.chi2_stereo)},
-        {"chi2_mono", set(&o.tracking.chi2_mono)},
-        {"close_depth_baselines", set(&o.tracking.close_depth_baselines)},
-        {"dynamic_class_ids", set(&o.tracking.dynamic_class_ids)}}},
-      {"keyframes",
-       {{"max_frames_between", set(&o.keyframes.max_frames_between)},
-        {"min_tracked_ratio", set(&o.keyframes.min_tracked_ratio)},
-        {"min_close_tracked", set(&o.keyframes.min_close_tracked)},
-        {"min_new_close", set(&o.keyframes.min_new_close)}}},
-      {"local_ba",
-       {{"window", set(&o.local_ba.window)}, {"max_fixed", set(&o.local_ba.max_fixed)},
-        {"iterations_first", set(&o.local_ba.iterations_first)},
-        {"iterations_second", set(&o.local_ba.iterations_second)},
-        {"huber_stereo", set(&o.local_ba.huber_stereo)}, {"huber_mono", set(&o.local_ba.huber_mono)},
-        {"num_threads", set(&o.local_ba.num_threads)}}},
-      {"map",
-       {{"min_found_ratio", set(&o.map.min_found_ratio)},
-        {"cull_after_keyframes", set(&o.map.cull_after_keyframes)}, {"max_points", set(&o.map.max_points)}}},
-  };
+std::map<std::string, FieldTable> option_table(tracking::SlamOptions& o) {
+  std::map<std::string, FieldTable> sections;
+  tracking::for_each_section(o, [&sections](const char* name, auto& section) {
+    sections[name] = field_table(section);
+  });
+  return sections;
+}
+
+std::string section_list(const std::map<std::string, FieldTable>& sections) {
+  std::string valid;
+  for (const auto& s : sections) valid += (valid.empty() ? "" : ", ") + s.first;
+  return valid;
 }
 }  // namespace
 
 py::dict default_slam_options() {
   tracking::SlamOptions o;
   py::dict out;
-  for (const auto& [section, fields] : option_table(o)) {
-    out[py::str(section)] = dump_section(fields);
-  }
+  for (const auto& [section, fields] : option_table(o)) out[py::str(section)] = dump_section(fields);
+  return out;
+}
+
+py::dict slam_option_ranges() {
+  tracking::SlamOptions o;
+  py::dict out;
+  for (const auto& [section, fields] : option_table(o)) out[py::str(section)] = dump_ranges(fields);
   return out;
 }
 
@@ -64,16 +47,43 @@ tracking::SlamOptions parse_slam_options(const py::dict& options) {
   for (const auto& item : options) {
     const std::string name = py::str(item.first);
     const auto it = sections.find(name);
-    if (it == sections.end()) {
-      std::string valid;
-      for (const auto& s : sections) valid += (valid.empty() ? "" : ", ") + s.first;
-      throw py::value_error("options: unknown section '" + name + "' (valid: " + valid + ")");
-    }
+    if (it == sections.end())
+      throw py::value_error("options: unknown section '" + name + "' (valid: " +
+                            section_list(sections) + ")");
     if (!py::isinstance<py::dict>(item.second))
       throw py::type_error("options: section '" + name + "' must be a dict");
     apply_section(item.second.cast<py::dict>(), name, it->second);
   }
+  try {
+    tracking::check_options(o);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(std::string("options: ") + e.what());
+  }
   return o;
+}
+
+void bind_slam_options(py::module_& m) {
+  m.def("check_options", [](const py::dict& options) { parse_slam_options(options); },
+        "options"_a, R"doc(Check SLAM options exactly as ``System`` reads them.
+
+Parameters
+----------
+options : dict
+    Nested ``{section: {key: value}}``, as ``twistslam.Config.to_options()`` gives it;
+    missing keys keep their defaults.
+
+Raises
+------
+ValueError
+    An unknown section or key, a value outside its range (see ``option_ranges``) or too large
+    for the core, ``stereo.min_depth >= stereo.max_depth``, or
+    ``orb.min_fast_threshold > orb.fast_threshold``; the message names the option.
+TypeError
+    A value of the wrong type (e.g. a float for an integer option).
+)doc");
+  m.def("option_ranges", &slam_option_ranges,
+        "Valid range ``(lo, hi)`` (inclusive, the option's unit) of every numeric option, nested\n"
+        "``{section: {key: (lo, hi)}}``; list options give the range of each element.");
 }
 
 }  // namespace twistslam::bindings

@@ -8,25 +8,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "options/option_range.hpp"
+
 namespace twistslam::features {
 
 namespace {
 
 constexpr int kCircleRadius = kPatchSize / 2;  // 15: intensity-centroid disc
-
-void check_options(const OrbOptions& o) {
-  auto fail = [](const std::string& what) {
-    throw std::invalid_argument("OrbOptions: " + what);
-  };
-  if (o.num_features < 0) fail("num_features must be >= 0");
-  if (!(o.scale_factor > 1.0f) || !(o.scale_factor <= 4.0f))
-    fail("scale_factor must be in (1, 4], got " + std::to_string(o.scale_factor));
-  if (o.num_levels < 1 || o.num_levels > 32) fail("num_levels must be in [1, 32]");
-  if (o.fast_threshold < 1 || o.fast_threshold > 254) fail("fast_threshold must be in [1, 254]");
-  if (o.min_fast_threshold < 1 || o.min_fast_threshold > o.fast_threshold)
-    fail("min_fast_threshold must be in [1, fast_threshold]");
-  if (o.cell_size < 8) fail("cell_size must be >= 8 px");
-}
 
 // Orientation of the intensity centroid of the disc of radius 15 around (x, y), degrees.
 float centroid_angle(const cv::Mat& img, int x, int y, const std::vector<int>& half_width) {
@@ -136,6 +124,19 @@ std::vector<int> distribute(const std::vector<cv::KeyPoint>& cand, const cv::Rec
 }
 
 }  // namespace
+
+void check_options(const OrbOptions& o) {
+  try {
+    options::check_ranges(o, "");
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("OrbOptions: ") + e.what());
+  }
+  if (o.min_fast_threshold > o.fast_threshold)
+    throw std::invalid_argument("OrbOptions: min_fast_threshold (" +
+                                std::to_string(o.min_fast_threshold) +
+                                ") must not exceed fast_threshold (" +
+                                std::to_string(o.fast_threshold) + ")");
+}
 
 std::vector<cv::Mat> build_pyramid(const cv::Mat& gray, float scale_factor, int num_levels) {
   std::vector<cv::Mat> levels;

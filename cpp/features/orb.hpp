@@ -8,8 +8,9 @@
 #include <opencv2/features2d.hpp>
 
 #include <cstdint>
-#include <cstring>
 #include <vector>
+
+#include "features/hamming.hpp"  // descriptor_distance of two raw descriptors
 
 namespace twistslam::features {
 
@@ -18,7 +19,6 @@ namespace twistslam::features {
 inline constexpr int kEdgeBorder = 19;
 // Side of the (unrotated) BRIEF patch and diameter of the orientation circle, level pixels.
 inline constexpr int kPatchSize = 31;
-inline constexpr int kDescriptorBytes = 32;
 
 struct OrbOptions {
   // Keypoints per (left) image. 2000 on KITTI's 1242x375 gives one corner per ~15x15 px, what
@@ -43,6 +43,32 @@ struct OrbOptions {
   // small enough to cover the image, large enough for the 7-px FAST retry to find a corner.
   int cell_size = 35;
 };
+
+// Every option with its valid range (inclusive, the field's unit), for the checks of
+// OrbExtractor and the Python bindings (options/option_range.hpp). The upper bounds are far
+// beyond any useful value; they keep the per-level shares and the stereo matcher's right-image
+// count (x right_features_factor <= 16) inside int.
+template <typename Visit>
+void for_each_option(OrbOptions& o, Visit&& visit) {
+  // 0 = pyramid only; 1e5 is one keypoint per ~5 px^2 of a KITTI image, more than FAST finds
+  visit("num_features", o.num_features, 0, 100000);
+  // 1.001: a ratio of 1 makes identical levels (and a zero sum of level shares); 4: a level a
+  // quarter the size of the previous one leaves scales no BRIEF descriptor bridges
+  visit("scale_factor", o.scale_factor, 1.001, 4.0);
+  // 32 levels of even 1.001 exceed nothing; of 1.2 they reach a 285x scale change
+  visit("num_levels", o.num_levels, 1, 32);
+  // grey levels of an 8-bit image: FAST compares against pixel +- threshold
+  visit("fast_threshold", o.fast_threshold, 1, 254);
+  visit("min_fast_threshold", o.min_fast_threshold, 1, 254);
+  // 8 px: FAST's 3-px ring leaves a smaller cell no room for a corner; 4096 px is one cell
+  // over any camera image (no bucketing)
+  visit("cell_size", o.cell_size, 8, 4096);
+}
+
+// Throws std::invalid_argument naming the option ("OrbOptions: num_levels = 0 is out of range
+// [1, 32]") for a value outside for_each_option's range or min_fast_threshold >
+// fast_threshold.
+void check_options(const OrbOptions& options);
 
 // Keypoints and descriptors of one image, one entry per keypoint (level order, coarse last).
 struct Keypoints {
@@ -110,18 +136,7 @@ class OrbExtractor {
 // for other types and for empty images.
 cv::Mat to_gray(const cv::Mat& bgr_or_gray, bool rgb = false);
 
-// Hamming distance of two 32-byte descriptors.
-inline int descriptor_distance(const std::uint8_t* a, const std::uint8_t* b) {
-  int d = 0;
-  for (int k = 0; k < kDescriptorBytes; k += 8) {
-    std::uint64_t x, y;
-    std::memcpy(&x, a + k, 8);
-    std::memcpy(&y, b + k, 8);
-    d += __builtin_popcountll(x ^ y);
-  }
-  return d;
-}
-// Same for two descriptor rows (1 x 32 CV_8U, e.g. descriptors.row(i)).
+// Hamming distance of two descriptor rows (1 x 32 CV_8U, e.g. descriptors.row(i)).
 // Throws std::invalid_argument if either is not 32 bytes of CV_8U.
 int descriptor_distance(const cv::Mat& a, const cv::Mat& b);
 

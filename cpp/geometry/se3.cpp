@@ -1,5 +1,7 @@
 #include "geometry/se3.hpp"
 
+#include <string>
+
 #include <Eigen/LU>
 #include <cmath>
 
@@ -96,12 +98,17 @@ Vec6 twist_between(const Mat4& T_a, const Mat4& T_b) {
   return se3_log(T_b * se3_inverse(T_a));
 }
 
-bool is_rigid_transform(const Mat4& T, double tol) {
-  if (!T.allFinite()) return false;
-  const Mat3 R = T.topLeftCorner<3, 3>();
-  const bool bottom_ok = (T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() <= tol;
-  const bool ortho_ok = (R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff() <= tol;
-  return bottom_ok && ortho_ok && R.determinant() > 0.0;
+Mat4 predict_constant_velocity(const Mat4& T_previous, const Mat4& T_last) {
+  return T_last * se3_inverse(T_previous) * T_last;
 }
+
+std::string rigid_transform_problem(const Mat4& T, double tol) {
+  if (!T.allFinite()) return "contains NaN or Inf";
+  const double last_row = (T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff();
+  if (!(last_row <= tol)) return "last row is not [0, 0, 0, 1]";
+  return rotation_problem(T.topLeftCorner<3, 3>(), tol);
+}
+
+bool is_rigid_transform(const Mat4& T, double tol) { return rigid_transform_problem(T, tol).empty(); }
 
 }  // namespace twistslam::geometry

@@ -5,6 +5,8 @@
 #include <Eigen/LU>
 #include <cmath>
 
+#include "options/option_range.hpp"
+
 namespace twistslam::geometry {
 namespace {
 // Below this angle (rad) the closed forms lose digits to cancellation, so we switch to the
@@ -19,6 +21,15 @@ Mat3 hat(const Vec3& a) {
 }
 
 Vec3 vee(const Mat3& A) { return Vec3(A(2, 1), A(0, 2), A(1, 0)); }
+
+std::string rotation_problem(const Mat3& R, double tol) {
+  if (!R.allFinite()) return "contains NaN or Inf";
+  const double orthogonality = (R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff();
+  if (!(orthogonality <= tol)) return "R^T R differs from I by " + options::format_number(orthogonality);
+  // R^T R = I leaves det R = +-1: only the sign is left to check
+  if (R.determinant() < 0) return "det R = -1 (a reflection)";
+  return {};
+}
 
 Mat3 so3_exp(const Vec3& w) {
   const double theta2 = w.squaredNorm();

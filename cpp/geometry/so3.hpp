@@ -1,5 +1,7 @@
 #pragma once
 // SO(3) exponential / logarithm and Jacobians in closed form, stable at tiny angles and near pi.
+#include <string>
+
 #include "geometry/types.hpp"
 
 namespace twistslam::geometry {
@@ -18,6 +20,10 @@ Mat3 so3_left_jacobian(const Vec3& w);
 Mat3 so3_left_jacobian_inverse(const Vec3& w);
 Mat3 so3_right_jacobian(const Vec3& w);
 Mat3 so3_right_jacobian_inverse(const Vec3& w);
+
+// Empty when R is a rotation (R^T R = I within tol, det R > 0), otherwise what is
+// wrong: "R^T R differs from I by 2", "det R = -1 (a reflection)", "contains NaN or Inf".
+std::string rotation_problem(const Mat3& R, double tol);
 
 // Nearest rotation (SVD projection), used to clean up matrices read from text files.
 Mat3 so3_orthonormalize(const Mat3& M);

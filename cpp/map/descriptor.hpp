@@ -1,24 +1,17 @@
 #pragma once
 // 256-bit binary (ORB) descriptor as a plain value type, so the map needs no OpenCV.
 #include <array>
-#include <bitset>
 #include <cstdint>
-#include <cstring>
+
+#include "features/hamming.hpp"
 
 namespace twistslam::map {
 
-using Descriptor = std::array<std::uint8_t, 32>;
+using Descriptor = std::array<std::uint8_t, features::kDescriptorBytes>;
 
 // Number of differing bits (Hamming distance) between two descriptors.
 inline int hamming(const Descriptor& a, const Descriptor& b) {
-  int bits = 0;
-  for (int i = 0; i < 4; ++i) {
-    std::uint64_t x, y;
-    std::memcpy(&x, a.data() + 8 * i, 8);
-    std::memcpy(&y, b.data() + 8 * i, 8);
-    bits += static_cast<int>(std::bitset<64>(x ^ y).count());
-  }
-  return bits;
+  return features::descriptor_distance(a.data(), b.data());
 }
 
 }  // namespace twistslam::map

@@ -23,12 +23,6 @@ using detail::huber_rho;
 using detail::huber_weight;
 using detail::predict_measurement;
 
-Mat3 skew(const Vec3& v) {
-  Mat3 S;
-  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return S;
-}
-
 bool valid_observation(const StereoObservation& o) {
   return o.point_w.allFinite() && o.uv.allFinite() && std::isfinite(o.u_right) &&
          std::isfinite(o.inv_sigma2) && o.inv_sigma2 > 0;
@@ -98,7 +92,7 @@ class PoseProblem {
       const Vec3 Xc = R * o.point_w + t;
       Eigen::Matrix<double, 3, 6> dX;  // dX_c / d delta for T <- exp(delta) T
       dX.leftCols<3>().setIdentity();
-      dX.rightCols<3>() = -skew(Xc);
+      dX.rightCols<3>() = -geometry::hat(Xc);
       if (o.is_stereo()) {
         Vec3 z;
         Mat3 Jz;

@@ -9,6 +9,7 @@
 // camera, which enforces cheirality.
 #include <ceres/sized_cost_function.h>
 
+#include "geometry/so3.hpp"
 #include "geometry/stereo_camera.hpp"
 #include "optim/pose_parameterization.hpp"
 #include "optim/stereo_projection.hpp"
@@ -21,8 +22,7 @@ inline Eigen::Matrix<double, 3, 4> rotate_jacobian_quaternion(const Eigen::Quate
                                                                const Vec3& X) {
   const Vec3 v = q.vec();
   const double w = q.w();
-  Mat3 Xx;
-  Xx << 0, -X.z(), X.y(), X.z(), 0, -X.x(), -X.y(), X.x(), 0;
+  const Mat3 Xx = geometry::hat(X);
   Eigen::Matrix<double, 3, 4> J;
   J.leftCols<3>() = -2.0 * w * Xx +
                     2.0 * (v.dot(X) * Mat3::Identity() + v * X.transpose() - 2.0 * X * v.transpose());

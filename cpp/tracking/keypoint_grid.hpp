@@ -8,8 +8,11 @@ namespace twistslam::tracking {
 
 class KeypointGrid {
  public:
+  // Throws std::invalid_argument for cell_px < 1. Non-finite keypoints are left out.
   void build(const std::vector<Vec2>& uv, int width, int height, int cell_px = 32);
-  // Indices of keypoints within `radius` px of (u, v) (square window, then exact distance).
+  // Indices of keypoints within `radius` px of (u, v) (square window, then exact distance);
+  // none for a non-finite (u, v) or a NaN / negative radius. Any finite or infinite radius
+  // and any position are safe (cells are clamped before they become ints).
   void query(double u, double v, double radius, std::vector<int>* out) const;
 
  private:

@@ -1,10 +1,13 @@
 #pragma once
-// Options of the stereo SLAM system. The Python Config (python/twistslam/config.py) is the
-// single place where defaults are explained; these defaults mirror it for C++-only use.
+// Options of the stereo SLAM system. The defaults here and the ranges of for_each_option
+// (options.cpp) are what the core applies, whether it is called from twistslam.Config or
+// directly; python/twistslam/config.py explains each default, and tests/python/test_config.py
+// checks that its defaults equal these key for key.
 #include <vector>
 
 #include "features/orb.hpp"
 #include "features/stereo.hpp"
+#include "features/stereo_option_ranges.hpp"
 
 namespace twistslam::tracking {
 
@@ -62,5 +65,77 @@ struct SlamOptions {
   LocalBAOptions local_ba;
   MapOptions map;
 };
+
+// Each section's fields with their valid ranges (inclusive, the field's unit), visited as
+// visit("key", field, lo, hi); see options/option_range.hpp. Upper bounds lie far beyond any
+// useful value: they refuse overflowing input (a radius of 1e30 px, 3e9 features) by name.
+template <typename Visit>
+void for_each_option(TrackingOptions& o, Visit&& visit) {
+  // inliers / points: more than extract_orb's 1e5 keypoints can never be met
+  visit("min_inliers", o.min_inliers, 1, 100000);
+  visit("min_init_points", o.min_init_points, 1, 100000);
+  // level-0 px: 2000 px searches the whole of any camera image already (the motion model
+  // widens it up to 4x); the bound keeps the grid's cell arithmetic inside int
+  visit("search_radius_px", o.search_radius_px, 0.0, 2000.0);
+  visit("local_map_search_radius_px", o.local_map_search_radius_px, 0.0, 2000.0);
+  visit("max_hamming", o.max_hamming, 0, 256);  // bits of a 256-bit descriptor
+  visit("ratio_test", o.ratio_test, 0.0, 1.0);
+  // rounds of a full pose solve: ORB-SLAM2 needs 4, 100 re-classify far past convergence
+  visit("pose_rounds", o.pose_rounds, 1, 100);
+  // chi-square gates: 1e4 is a 100-sigma gate, i.e. no gating
+  visit("chi2_stereo", o.chi2_stereo, 0.0, 10000.0);
+  visit("chi2_mono", o.chi2_mono, 0.0, 10000.0);
+  // baselines: 1e4 baselines (5 km on KITTI) makes every point "close"
+  visit("close_depth_baselines", o.close_depth_baselines, 0.0, 10000.0);
+  // class ids of a 16-bit panoptic label image
+  visit("dynamic_class_ids", o.dynamic_class_ids, 0, 65535);
+}
+
+template <typename Visit>
+void for_each_option(KeyframeOptions& o, Visit&& visit) {
+  visit("max_frames_between", o.max_frames_between, 1, 100000);  // frames: ~3 h at 10 Hz
+  visit("min_tracked_ratio", o.min_tracked_ratio, 0.0, 1.0);
+  visit("min_close_tracked", o.min_close_tracked, 0, 100000);  // points: extract_orb's limit
+  visit("min_new_close", o.min_new_close, 0, 100000);
+}
+
+template <typename Visit>
+void for_each_option(LocalBAOptions& o, Visit&& visit) {
+  // keyframes: a window of 500 is a BA of minutes per keyframe, far past a local BA
+  visit("window", o.window, 1, 500);
+  visit("max_fixed", o.max_fixed, 0, 500);
+  // Ceres iterations: LM converges in tens; 1000 is "until converged"
+  visit("iterations_first", o.iterations_first, 0, 1000);
+  visit("iterations_second", o.iterations_second, 0, 1000);
+  // px: a Huber kink of 0 is undefined (Ceres divides by it); 1000 px is larger than the
+  // image, i.e. a plain least-squares cost
+  visit("huber_stereo", o.huber_stereo, 0.01, 1000.0);
+  visit("huber_mono", o.huber_mono, 0.01, 1000.0);
+  visit("num_threads", o.num_threads, 1, 256);  // threads: more than any CPU here
+}
+
+template <typename Visit>
+void for_each_option(MapOptions& o, Visit&& visit) {
+  visit("min_found_ratio", o.min_found_ratio, 0.0, 1.0);
+  visit("cull_after_keyframes", o.cull_after_keyframes, 0, 100000);  // keyframes
+  // points: 1e8 points are ~50 GB of descriptors and observations
+  visit("max_points", o.max_points, 1, 100000000);
+}
+
+// Every section of SlamOptions under its name in twistslam.Config, as visit(name, section).
+template <typename VisitSection>
+void for_each_section(SlamOptions& o, VisitSection&& visit) {
+  visit("orb", o.orb);
+  visit("stereo", o.stereo);
+  visit("tracking", o.tracking);
+  visit("keyframes", o.keyframes);
+  visit("local_ba", o.local_ba);
+  visit("map", o.map);
+}
+
+// Throws std::invalid_argument naming the option ("tracking.search_radius_px = inf is out of
+// range [0, 2000]") for any value outside its range, and for min_depth >= max_depth or
+// min_fast_threshold > fast_threshold.
+void check_options(const SlamOptions& options);
 
 }  // namespace twistslam::tracking

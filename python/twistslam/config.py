@@ -4,8 +4,12 @@ A :class:`Config` is one dataclass per section (``orb``, ``stereo``, ``tracking`
 ``keyframes``, ``local_ba``, ``map``, ``run``, ``objects``). Each field carries its unit and the reason for
 its default (``dataclasses.fields(...)[i].metadata``), and both are written as comments into
 the YAML that :meth:`Config.to_yaml` saves beside every result. The C++ core receives all
-sections but ``run`` and ``objects`` (read by the object tracker) as the nested dictionary :meth:`Config.to_options`; this module is the
-single place where those names and defaults are defined.
+sections but ``run`` and ``objects`` (read by the object tracker) as the nested dictionary
+:meth:`Config.to_options`. The ranges of those sections are the core's
+(``twistslam._core.slam.option_ranges()``): :meth:`Config.validate` asks the core to check
+them, so a value is refused with the same message whether it comes through a ``Config`` or
+straight to the core. Their defaults are written here, beside the reason for each, and
+``tests/python/test_config.py`` checks them against the core's key for key.
 
 >>> cfg = Config()
 >>> cfg.override(["tracking.min_inliers=40", "run.max_frames=20"]).tracking.min_inliers
@@ -21,6 +25,8 @@ from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
+from twistslam._core import slam as _core_slam
+
 from ._settings import coerce, param
 from .config_objects import ObjectsConfig
 
@@ -34,16 +40,16 @@ class OrbConfig:
     num_features: int = param(3000, "ORB-SLAM2 uses 2000 on KITTI; 3000 cuts the rotation RPE "
                               "by ~20 % on the simulator (urban 0.0139 -> 0.0119, static "
                               "0.0148 -> 0.0123 deg/frame) for ~+2 ms of features and more BA "
-                              "points (paid by local_ba's shorter schedule)", lo=1)
-    scale_factor: float = param(1.2, "ORB-SLAM2's pyramid ratio: fine scale steps", lo=1.0001)
+                              "points (paid by local_ba's shorter schedule)")
+    scale_factor: float = param(1.2, "ORB-SLAM2's pyramid ratio: fine scale steps")
     num_levels: int = param(4, "1.2^3 = 1.7x scale range: enough between frames 2 apart, and "
                             "coarse levels localise to +-2 px (ORB-SLAM2's 8 levels: rotation "
-                            "RPE 0.0176 -> 0.0147 deg/frame with 4 on the simulator)", lo=1)
-    fast_threshold: int = param(20, "FAST contrast, ORB-SLAM2's iniThFAST", "grey levels", lo=1)
+                            "RPE 0.0176 -> 0.0147 deg/frame with 4 on the simulator)")
+    fast_threshold: int = param(20, "FAST contrast, ORB-SLAM2's iniThFAST", "grey levels")
     min_fast_threshold: int = param(
-        7, "retry threshold in low-texture cells, ORB-SLAM2's minThFAST", "grey levels", lo=1)
+        7, "retry threshold in low-texture cells, ORB-SLAM2's minThFAST", "grey levels")
     cell_size: int = param(35, "grid cell that spreads features over the image, as ORB-SLAM2",
-                           "px", lo=4)
+                           "px")
 
 
 @dataclass
@@ -52,52 +58,49 @@ class StereoConfig:
 
     max_hamming: int = param(75, "half-way between ORB's strict 50 and loose 100: the views of "
                              "a 0.5 m baseline differ little, the SAD check removes the rest",
-                             "bits", lo=0, hi=256)
+                             "bits")
     row_radius: float = param(2.0, "row band searched in the right image: FAST's 1-px "
                               "localisation at coarse levels plus KITTI's vertical offset",
-                              "px", lo=0.0)
+                              "px")
     octave_tolerance: int = param(1, "both views see a surface at almost the same scale",
-                                  "levels", lo=0)
+                                  "levels")
     patch_radius: int = param(7, "half width of the 15x5 SAD window: sub-pixel accurate on "
-                              "surfaces slanted in depth such as the road", "px", lo=1)
+                              "surfaces slanted in depth such as the road", "px")
     patch_half_height: int = param(2, "half height of the 15x5 SAD window: a tall window smears "
-                                   "the disparity change of slanted surfaces", "px", lo=0)
+                                   "the disparity change of slanted surfaces", "px")
     refine_range: int = param(5, "SAD search of +-5 px around the descriptor match, room to "
-                              "reject minima on the border", "px", lo=1)
-    min_depth: float = param(0.5, "nearer is the ego car's own bonnet", "m", lo=0.0)
+                              "reject minima on the border", "px")
+    min_depth: float = param(0.5, "nearer is the ego car's own bonnet", "m")
     max_depth: float = param(80.0, "disparity ~5 px at 80 m on KITTI: depth too uncertain beyond",
-                             "m", lo=0.0)
+                             "m")
     outlier_factor: float = param(2.1, "drop matches whose normalised SAD exceeds 2.1x the "
-                                  "frame's median (~1.5 robust sigma)", lo=0.0)
+                                  "frame's median (~1.5 robust sigma)")
     right_features_factor: float = param(
-        2.0, "the right image gets 2x keypoints as match candidates: ~63 % -> ~77 % matched",
-        lo=0.1)
+        2.0, "the right image gets 2x keypoints as match candidates: ~63 % -> ~77 % matched")
 
 
 @dataclass
 class TrackingConfig:
     """Camera tracking from static points (paper eq. 3): motion model, then local map."""
 
-    min_inliers: int = param(30, "below this the frame is lost (ORB-SLAM2's local-map test)", lo=1)
+    min_inliers: int = param(30, "below this the frame is lost (ORB-SLAM2's local-map test)")
     min_init_points: int = param(
         100, "stereo points needed to start (or restart) a map: fewer cannot carry tracking",
-        "points", lo=1)
+        "points")
     search_radius_px: float = param(
-        15.0, "projection search window of the constant-velocity model", "px", lo=0.0)
+        15.0, "projection search window of the constant-velocity model", "px")
     local_map_search_radius_px: float = param(
-        4.0, "the pose is already refined: small window against the local map", "px", lo=0.0)
+        4.0, "the pose is already refined: small window against the local map", "px")
     max_hamming: int = param(40, "stricter than ORB-SLAM2's 50: repetitive facades gave wrong "
-                             "matches that survived the chi-square test", "bits", lo=0, hi=256)
+                             "matches that survived the chi-square test", "bits")
     ratio_test: float = param(0.7, "best / second-best distance; 0.9 let repetitive texture "
-                              "through (simulator: -40 % rotation error at 0.7)", lo=0.0, hi=1.0)
-    pose_rounds: int = param(4, "pose-only optimisation rounds re-classifying outliers, as ORB-SLAM2",
-                             lo=1)
-    chi2_stereo: float = param(7.815, "95 % quantile of chi-square, 3 DoF (u_l, v, u_r)", lo=0.0)
-    chi2_mono: float = param(5.991, "95 % quantile of chi-square, 2 DoF (u, v)", lo=0.0)
+                              "through (simulator: -40 % rotation error at 0.7)")
+    pose_rounds: int = param(4, "pose-only optimisation rounds re-classifying outliers, as ORB-SLAM2")
+    chi2_stereo: float = param(7.815, "95 % quantile of chi-square, 3 DoF (u_l, v, u_r)")
+    chi2_mono: float = param(5.991, "95 % quantile of chi-square, 2 DoF (u, v)")
     close_depth_baselines: float = param(
         40.0, "keypoints nearer than 40 baselines are 'close' for the keyframe rule "
-        "(ORB-SLAM's); every stereo match still becomes a map point", "baselines",
-        lo=0.0)
+        "(ORB-SLAM's); every stereo match still becomes a map point", "baselines")
     dynamic_class_ids: list[int] = param(
         [], "panoptic classes whose pixels give no points to camera tracking (eq. 3); "
         "none until a segmenter is configured")
@@ -110,33 +113,31 @@ class KeyframeConfig:
     max_frames_between: int = param(
         2, "temporal keyframe at least every 2 frames: the local BA is what removes the "
         "per-frame tracking noise (simulator: RPE halves from 5 to 2, at ~25 ms per frame)",
-        "frames", lo=1)
+        "frames")
     min_tracked_ratio: float = param(
         0.75, "spatial keyframe when tracked points drop below this fraction of the "
-        "reference keyframe's (ORB-SLAM2 stereo)", lo=0.0, hi=1.0)
+        "reference keyframe's (ORB-SLAM2 stereo)")
     min_close_tracked: int = param(
-        100, "insert when fewer close points than this are tracked (ORB-SLAM2 stereo)", lo=0)
+        100, "insert when fewer close points than this are tracked (ORB-SLAM2 stereo)")
     min_new_close: int = param(
-        70, "... and at least this many new close points could be created (ORB-SLAM2)", lo=0)
+        70, "... and at least this many new close points could be created (ORB-SLAM2)")
 
 
 @dataclass
 class LocalBAConfig:
     """Local bundle adjustment after each keyframe."""
 
-    window: int = param(10, "keyframes optimised: bounded cost per keyframe", "keyframes", lo=1)
-    max_fixed: int = param(20, "covisible keyframes held fixed to anchor the gauge", "keyframes",
-                           lo=0)
+    window: int = param(10, "keyframes optimised: bounded cost per keyframe", "keyframes")
+    max_fixed: int = param(20, "covisible keyframes held fixed to anchor the gauge", "keyframes")
     iterations_first: int = param(3, "before outlier removal; ORB-SLAM2's 5 + 10 run in a "
                                   "thread of their own, ours share the loop: 3 + 4 gave the "
-                                  "same RPE/ATE on the simulator at ~30 % less BA time", lo=0)
+                                  "same RPE/ATE on the simulator at ~30 % less BA time")
     iterations_second: int = param(4, "after outlier removal (the BA of the next keyframe, 2 "
-                                   "frames later, continues from here)", lo=0)
+                                   "frames later, continues from here)")
     huber_stereo: float = param(2.796, "sqrt(7.815): Huber kink at the stereo chi-square gate",
-                                "px", lo=0.0)
-    huber_mono: float = param(2.448, "sqrt(5.991): Huber kink at the mono chi-square gate", "px",
-                              lo=0.0)
-    num_threads: int = param(2, "Ceres threads; tracking keeps the other cores", lo=1)
+                                "px")
+    huber_mono: float = param(2.448, "sqrt(5.991): Huber kink at the mono chi-square gate", "px")
+    num_threads: int = param(2, "Ceres threads; tracking keeps the other cores")
 
 
 @dataclass
@@ -144,12 +145,11 @@ class MapConfig:
     """Map point creation and culling."""
 
     min_found_ratio: float = param(
-        0.25, "cull points found in fewer than 1/4 of the frames that should see them (ORB-SLAM2)",
-        lo=0.0, hi=1.0)
+        0.25, "cull points found in fewer than 1/4 of the frames that should see them (ORB-SLAM2)")
     cull_after_keyframes: int = param(
-        2, "a new point is judged after 2 more keyframes (ORB-SLAM2)", "keyframes", lo=0)
+        2, "a new point is judged after 2 more keyframes (ORB-SLAM2)", "keyframes")
     max_points: int = param(200000, "memory bound of the map (~100 MB of descriptors and "
-                            "observations)", "points", lo=1)
+                            "observations)", "points")
 
 
 @dataclass
@@ -291,12 +291,12 @@ class Config:
                 key = f"{name}.{f.name}"
                 value = coerce(getattr(section, f.name), types_[f.name], key)
                 setattr(section, f.name, value)
-                _check_range(value, f.metadata, key)
-        if self.stereo.min_depth >= self.stereo.max_depth:
-            raise ValueError(f"stereo.min_depth ({self.stereo.min_depth}) must be below "
-                             f"stereo.max_depth ({self.stereo.max_depth})")
-        if self.orb.min_fast_threshold > self.orb.fast_threshold:
-            raise ValueError("orb.min_fast_threshold must not exceed orb.fast_threshold")
+                if name in _NOT_FOR_CORE:
+                    _check_range(value, f.metadata, key)
+        try:  # ranges and cross-field rules of the core's sections: the core's own check
+            _core_slam.check_options(self.to_options())
+        except ValueError as exc:
+            raise ValueError(str(exc).removeprefix("options: ")) from None
 
     # ---------------------------------------------------------------------- output
     def to_dict(self) -> dict[str, dict[str, Any]]:
@@ -332,16 +332,25 @@ class Config:
 
     @staticmethod
     def describe(dotted: str) -> dict[str, Any]:
-        """Default, unit, reason and range of one setting, e.g. ``"tracking.min_inliers"``."""
+        """Default, unit, reason and range (``lo``, ``hi``: inclusive; ``None`` = unbounded)
+        of one setting, e.g. ``"tracking.min_inliers"``."""
         section_name, _, key = dotted.partition(".")
         for f in fields(_section_type(section_name)):
             if f.name == key:
                 default = f.default if f.default is not MISSING else f.default_factory()
-                return {"default": default, **f.metadata}
+                info = {"default": default, **f.metadata}
+                if section_name not in _NOT_FOR_CORE:
+                    info["lo"], info["hi"] = _core_ranges()[section_name].get(key, (None, None))
+                return info
         raise ValueError(f"unknown key {dotted!r}")
 
 
 # ------------------------------------------------------------------------- helpers
+def _core_ranges() -> dict[str, dict[str, tuple[float, float]]]:
+    """``{section: {key: (lo, hi)}}`` of the core's options (inclusive, in each unit)."""
+    return _core_slam.option_ranges()
+
+
 def _section_type(name: str) -> type:
     if name not in SECTIONS:
         raise ValueError(f"unknown config section {name!r}; sections: {', '.join(SECTIONS)}")

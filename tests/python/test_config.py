@@ -29,7 +29,7 @@ def test_options_match_the_core_contract():
 
 def test_feature_defaults_agree_with_the_features_module():
     # the C++ matcher documents why each default was chosen; the config must not drift from it
-    from twistslam._core import features
+    from twistslam import features
 
     core = features.default_options()
     options = Config().to_options()
@@ -130,13 +130,23 @@ def test_override_list_and_mapping():
     ("tracking.min_inliers", "expected section.key=value"),
     ("tracking.min_inliers=3.5", "tracking.min_inliers: expected int, got '3.5'"),
     ("tracking.min_inliers=true", "tracking.min_inliers: expected int"),
-    ("tracking.min_inliers=0", r"tracking.min_inliers = 0 is out of range \[1, inf\]"),
-    ("tracking.ratio_test=1.5", r"tracking.ratio_test = 1.5 is out of range \[0.0, 1.0\]"),
+    ("tracking.min_inliers=0", r"tracking.min_inliers = 0 is out of range \[1, 100000\]"),
+    ("tracking.ratio_test=1.5", r"tracking.ratio_test = 1.5 is out of range \[0, 1\]"),
     ("tracking.chi2_mono=nan", "tracking.chi2_mono = nan is out of range"),
     ("run.use_labels=maybe", "run.use_labels: expected bool, got 'maybe'"),
     ("run.start_frame=none", "run.start_frame: expected int, got 'none'"),
     ("tracking.dynamic_class_ids=[car]", r"tracking.dynamic_class_ids\[0\]: expected int"),
     ("stereo.min_depth=90", "stereo.min_depth .* must be below stereo.max_depth"),
+    # values that used to overflow into the core (a TypeError, or UBSan float-to-int casts)
+    ("orb.num_features=3e9", r"orb.num_features = 3000000000 is out of range \[0, 100000\]"),
+    (f"orb.num_features={2**32}", r"orb.num_features = 4294967296 is out of range"),
+    (f"orb.num_features={2**70}", rf"orb.num_features = {2**70} is out of range"),
+    ("orb.num_features=2**32", r"orb.num_features: expected int, got '2\*\*32'"),
+    ("orb.num_features=1e400", "orb.num_features: expected int"),
+    ("stereo.row_radius=1e30", r"stereo.row_radius = 1e\+30 is out of range \[0, 64\]"),
+    ("tracking.search_radius_px=inf", r"tracking.search_radius_px = inf is out of range \[0, 2000\]"),
+    ("tracking.dynamic_class_ids=[24, -1]", r"tracking.dynamic_class_ids = -1 is out of range"),
+    ("local_ba.huber_mono=0", r"local_ba.huber_mono = 0.0 is out of range \[0.01, 1000\]"),
 ])
 def test_bad_overrides_raise_and_change_nothing(item, message):
     config = Config()
@@ -154,6 +164,54 @@ def test_construction_is_validated():
         Config().override("orb.min_fast_threshold=30")
 
 
+@pytest.mark.parametrize("section, key, value", [
+    ("orb", "num_features", 3_000_000_000), ("orb", "num_features", 2**32),
+    ("stereo", "row_radius", 1e30), ("tracking", "search_radius_px", float("inf")),
+    ("orb", "cell_size", 5), ("stereo", "min_depth", 0.0), ("keyframes", "min_tracked_ratio", -0.1),
+])
+def test_config_and_core_refuse_a_value_with_the_same_message(section, key, value):
+    # one set of range checks: the core's, whether it is reached through a Config or directly
+    from twistslam._core import slam
+
+    with pytest.raises(ValueError) as through_config:
+        Config().override({f"{section}.{key}": value})
+    with pytest.raises(ValueError) as directly:
+        slam.check_options({section: {key: value}})
+    assert f"{section}.{key} = " in str(directly.value)
+    assert str(directly.value) == "options: " + str(through_config.value)
+
+
+def test_core_refuses_wrong_types_by_name():
+    from twistslam._core import slam
+
+    with pytest.raises(TypeError, match="options: tracking.min_inliers: expected an integer, got float"):
+        slam.check_options({"tracking": {"min_inliers": 30.0}})
+    with pytest.raises(TypeError, match="options: orb.scale_factor: expected a number, got str"):
+        slam.check_options({"orb": {"scale_factor": "1.2"}})
+    with pytest.raises(TypeError, match="options: orb.num_features: expected an integer, got bool"):
+        slam.check_options({"orb": {"num_features": True}})
+    with pytest.raises(ValueError, match="unknown key 'orb.num_feature'"):
+        slam.check_options({"orb": {"num_feature": 10}})
+    slam.check_options(Config().to_options())  # the defaults pass
+
+
+def test_every_numeric_core_option_has_a_finite_range_that_holds_its_default():
+    from twistslam._core import slam
+
+    ranges = slam.option_ranges()
+    for section, values in Config().to_options().items():
+        for key, default in values.items():
+            if isinstance(default, bool) or not isinstance(default, (int, float, list)):
+                continue
+            lo, hi = ranges[section][key]
+            assert lo <= hi < float("inf"), f"{section}.{key}"
+            for v in default if isinstance(default, list) else [default]:
+                assert lo <= v <= hi, f"{section}.{key} = {v} outside [{lo}, {hi}]"
+            # integer options have integer bounds (an int range reads as one)
+            if isinstance(default, int):
+                assert type(lo) is int and type(hi) is int, f"{section}.{key}"
+
+
 def test_copies_do_not_share_lists():
     a = Config()
     b = Config.from_dict(a.to_dict())
@@ -164,5 +222,7 @@ def test_copies_do_not_share_lists():
 def test_describe():
     d = Config.describe("stereo.max_depth")
     assert d["default"] == 80.0 and d["unit"] == "m" and "disparity" in d["why"]
+    assert (d["lo"], d["hi"]) == (0.01, 10000.0)  # the core's range
+    assert (Config.describe("orb.num_features")["lo"], Config.describe("orb.num_features")["hi"]) == (0, 100000)
     with pytest.raises(ValueError, match="unknown key"):
         Config.describe("stereo.nope")

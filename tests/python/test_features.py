@@ -1,4 +1,4 @@
-"""ORB extraction and stereo matching bindings (twistslam._core.features).
+"""ORB extraction and stereo matching (twistslam.features, the facade of twistslam._core.features).
 
 Stereo accuracy is checked on a pair rendered by twistslam.sim.planes: fronto-parallel
 textured planes ray-cast for KITTI sequence 0000's cameras 2 and 3, so every keypoint has a
@@ -78,16 +78,27 @@ def test_options_dict_and_kwargs(textured):
     assert np.all(r["octave"] == 0)
     defaults = f.default_options()
     assert defaults["num_features"] == 2000 and defaults["max_depth"] == 80.0
-    with pytest.raises(ValueError, match="unknown option 'num_feature'"):
+    # one conversion path with the SLAM options (options_table): Python's error types, the
+    # option's name and range in every message
+    with pytest.raises(TypeError, match="unexpected keyword argument 'num_feature'"):
         f.extract_orb(textured, num_feature=10)
-    with pytest.raises(ValueError, match="max_depth"):  # a stereo option is not an ORB option
+    with pytest.raises(ValueError, match="unknown key 'num_feature'"):
+        f.extract_orb(textured, {"num_feature": 10})
+    with pytest.raises(TypeError, match="max_depth"):  # a stereo option is not an ORB option
         f.extract_orb(textured, max_depth=10)
-    with pytest.raises(ValueError, match="scale_factor"):
+    with pytest.raises(ValueError, match=r"scale_factor = 1.0 is out of range \[1.001, 4\]"):
         f.extract_orb(textured, scale_factor=1.0)
-    with pytest.raises(ValueError, match="num_features"):
+    with pytest.raises(TypeError, match="num_features: expected an integer, got str"):
         f.extract_orb(textured, num_features="many")
-    with pytest.raises(ValueError, match="integer"):
+    with pytest.raises(TypeError, match="num_levels: expected an integer, got float"):
         f.extract_orb(textured, num_levels=2.5)
+    with pytest.raises(ValueError, match=r"num_features = 3000000000 is out of range \[0, 100000\]"):
+        f.extract_orb(textured, num_features=3_000_000_000)
+    with pytest.raises(ValueError, match="min_fast_threshold .* must not exceed fast_threshold"):
+        f.extract_orb(textured, fast_threshold=10, min_fast_threshold=12)
+    ranges = f.option_ranges()
+    assert ranges["num_features"] == (0, 100000) and ranges["row_radius"] == (0.0, 64.0)
+    assert set(ranges) == set(defaults)  # every option has a range
 
 
 def test_rgb_equals_its_grey_and_views_are_handled(textured):
@@ -163,6 +174,10 @@ def test_match_stereo_bad_input(camera, pair):
         f.match_stereo(np.zeros((0, 0), np.uint8), np.zeros((0, 0), np.uint8), camera)
     with pytest.raises(ValueError, match="min_depth"):
         f.match_stereo(left, right, camera, min_depth=10, max_depth=5)
+    with pytest.raises(ValueError, match=r"row_radius = 1e\+30 is out of range \[0, 64\]"):
+        f.match_stereo(left, right, camera, row_radius=1e30)
+    with pytest.raises(ValueError, match="max_depth = inf is out of range"):
+        f.match_stereo(left, right, camera, {"max_depth": float("inf")})
     with pytest.raises(TypeError):
         f.match_stereo(left, right, "not a camera")
 

@@ -114,6 +114,61 @@ def test_wrong_shapes_raise_value_error(call):
         call()
 
 
+@pytest.mark.parametrize("call, message", [
+    (lambda: g.so3_exp([np.nan, 0, 0]), r"w: contains NaN or Inf at \[0\]"),
+    (lambda: g.se3_exp([0, 0, 0, 0, np.inf, 0]), r"xi: contains NaN or Inf at \[4\]"),
+    (lambda: g.so3_left_jacobian([0, -np.inf, 0]), "w: contains NaN or Inf"),
+    (lambda: g.projector_planar([0, np.nan, 1]), "normal: contains NaN or Inf"),
+    (lambda: g.se3_log(np.ones((4, 4))), r"T: not a rigid transform .*last row"),
+    (lambda: g.so3_log(3 * np.eye(3)), r"R: not a rotation: R\^T R differs from I by 8"),
+    (lambda: g.so3_log(np.diag([1.0, 1.0, -1.0])), "R: not a rotation: det R = -1"),
+    (lambda: g.se3_inverse(np.diag([2.0, 1, 1, 1])), "T: not a rigid transform"),
+    (lambda: g.se3_compose(np.eye(4), np.diag([1.0, 1, 1, 2])), "B: not a rigid transform"),
+    (lambda: g.twist_between(np.eye(4), np.full((4, 4), np.nan)), "T_b: contains NaN"),
+    (lambda: g.transform_points(np.diag([1.0, 1, 1, 0]), np.zeros((2, 3))), "T: not a rigid"),
+    (lambda: g.predict_constant_velocity(np.eye(4), 2 * np.eye(4)), "T_last: not a rigid"),
+])
+def test_non_finite_and_non_rigid_inputs_are_refused_by_name(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()
+
+
+def test_rigid_transforms_rounded_to_text_precision_are_accepted():
+    # poses read from KITTI-style text files carry ~6 significant digits
+    rng = np.random.default_rng(7)
+    T = g.se3_exp(rng.normal(size=6))
+    rounded = np.array([[float(f"{v:.6e}") for v in row] for row in T])
+    np.testing.assert_allclose(g.se3_exp(g.se3_log(rounded)), rounded, atol=1e-5)
+
+
+def test_constant_velocity_prediction_repeats_the_last_motion():
+    rng = np.random.default_rng(5)
+    T_a = g.se3_exp(rng.normal(size=6))
+    motion = g.se3_exp([0.8, 0.0, 0.1, 0.0, 0.02, 0.0])  # ~1 m forward, a slight turn
+    T_b = motion @ T_a
+    predicted = g.predict_constant_velocity(T_a, T_b)
+    np.testing.assert_allclose(predicted, motion @ T_b, atol=1e-12)
+    # the prediction of the inverses is the inverse of the prediction (T_w_c vs T_c_w)
+    inverse = g.predict_constant_velocity(np.linalg.inv(T_a), np.linalg.inv(T_b))
+    np.testing.assert_allclose(inverse, np.linalg.inv(predicted), atol=1e-12)
+    # no motion: the last pose again
+    np.testing.assert_allclose(g.predict_constant_velocity(T_b, T_b), T_b, atol=1e-12)
+
+
+def test_facade_functions_are_typed_and_documented():
+    import inspect
+    import typing
+
+    for name in g.__all__:
+        obj = getattr(g, name)
+        if inspect.isclass(obj):
+            continue
+        assert obj.__module__ == "twistslam.geometry", name
+        hints = typing.get_type_hints(obj)
+        assert "return" in hints and len(hints) == len(inspect.signature(obj).parameters) + 1, name
+        assert obj.__doc__ and not obj.__doc__.startswith(name + "("), name
+
+
 def test_non_numeric_input_raises_type_error():
     with pytest.raises(TypeError):
         g.se3_exp(np.array(["a"] * 6))

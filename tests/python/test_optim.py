@@ -1,4 +1,4 @@
-"""twistslam._core.optim: pose-only optimisation and bundle adjustment on synthetic KITTI-like
+"""twistslam.optim: pose-only optimisation and bundle adjustment on synthetic KITTI-like
 scenes (street, points 3-60 m, 1 px noise), shape checks and degenerate inputs."""
 
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from twistslam import geometry as g
-from twistslam._core import optim
+from twistslam import optim
 
 P2 = np.array([[721.5377, 0, 609.5593, 44.85728], [0, 721.5377, 172.854, 0.2163791],
                [0, 0, 1, 0.002745884]])
@@ -121,8 +121,14 @@ def test_pose_options_and_float32(cam):
     np.testing.assert_array_equal(r0["T_c_w"], T0)
     with pytest.raises(TypeError, match="unexpected keyword argument 'roundz'"):
         optim.optimize_pose(T0, X_w, uv, ur, info, cam, roundz=3)
-    with pytest.raises(ValueError, match="rounds"):
+    with pytest.raises(ValueError, match=r"options: rounds = -1 is out of range \[0, 100\]"):
         optim.optimize_pose(T0, X_w, uv, ur, info, cam, rounds=-1)
+    with pytest.raises(ValueError, match=r"options: rounds = 4294967296 is out of range"):
+        optim.optimize_pose(T0, X_w, uv, ur, info, cam, rounds=2**32)  # no int overflow
+    with pytest.raises(ValueError, match="options: chi2_mono = nan is out of range"):
+        optim.optimize_pose(T0, X_w, uv, ur, info, cam, chi2_mono=float("nan"))
+    with pytest.raises(TypeError, match="options: rounds: expected an integer, got float"):
+        optim.optimize_pose(T0, X_w, uv, ur, info, cam, rounds=2.5)
 
 
 def test_pose_degenerate_inputs(cam):
@@ -144,9 +150,15 @@ def test_pose_degenerate_inputs(cam):
     assert not r["converged"] and r["num_inliers"] == 0
     np.testing.assert_array_equal(r["T_c_w"], flip @ T_true)
 
+    # an initial pose that is not a finite rigid transform is refused, naming the argument
     bad = T_true.copy()
     bad[0, 0] = np.nan
-    assert not optim.optimize_pose(bad, X_w, uv, ur, info, cam)["converged"]
+    with pytest.raises(ValueError, match=r"T_c_w_init: contains NaN or Inf at \[0, 0\]"):
+        optim.optimize_pose(bad, X_w, uv, ur, info, cam)
+    scaled = T_true.copy()
+    scaled[:3, :3] *= 3
+    with pytest.raises(ValueError, match=r"T_c_w_init: not a rigid transform .* R\^T R differs"):
+        optim.optimize_pose(scaled, X_w, uv, ur, info, cam)
 
     with pytest.raises(ValueError, match="T_c_w_init"):
         optim.optimize_pose(np.eye(3), X_w, uv, ur, info, cam)
@@ -286,6 +298,21 @@ def test_bundle_adjust_shapes_and_indices(cam):
         call(0, s["poses0"], linear_solver="cholmod")
     with pytest.raises(TypeError, match="unexpected keyword"):
         call(0, s["poses0"], max_iterations=3)
+    with pytest.raises(ValueError, match="options: num_threads = 0 is out of range"):
+        call(0, s["poses0"], num_threads=0)
+    # a pose with R = 3 I used to "succeed"; every pose must be a finite rigid transform
+    scaled = s["poses0"].copy()
+    scaled[1, :3, :3] = 3 * np.eye(3)
+    with pytest.raises(ValueError, match=r"poses_c_w\[1\]: not a rigid transform"):
+        call(0, scaled)
+    reflected = s["poses0"].copy()
+    reflected[2, :3, :3] = np.diag([1.0, 1.0, -1.0])
+    with pytest.raises(ValueError, match=r"poses_c_w\[2\]: .*reflection"):
+        call(0, reflected)
+    infinite = s["poses0"].copy()
+    infinite[0, 0, 3] = np.inf
+    with pytest.raises(ValueError, match=r"poses_c_w\[0\]: .*NaN or Inf"):
+        call(0, infinite)
     for solver in ["dense_schur", "sparse_schur", "iterative_schur"]:
         assert call(0, s["poses0"], linear_solver=solver, num_threads=1)["converged"]
 
