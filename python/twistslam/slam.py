@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from . import geometry
 from .config import Config
 from .datasets import Calibration, Frame
 
@@ -164,13 +165,14 @@ class Slam:
         )
 
     def _predict(self) -> np.ndarray:
-        """Constant-velocity prediction from the last two poses (identity at the start)."""
+        """Constant-velocity prediction from the last two poses (identity at the start), the
+        core's own formula (``geometry.predict_constant_velocity``)."""
         if not self._last:
             return np.eye(4)
         if len(self._last) == 1:
             return self._last[-1].copy()
         prev, last = self._last
-        return last @ np.linalg.inv(prev) @ last
+        return geometry.predict_constant_velocity(prev, last)
 
     def trajectory(self) -> dict[str, np.ndarray] | None:
         """``frame_index`` (N,) and ``T_w_c`` (N, 4, 4) of every frame tracked so far,
