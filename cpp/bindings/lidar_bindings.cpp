@@ -83,11 +83,11 @@ l::ScanProjection project(const py::handle& points_c, const geometry::StereoCame
     m = mask_array(mask, camera.width, camera.height);
     mask_mat = cv::Mat(camera.height, camera.width, CV_8UC1, const_cast<void*>(m.data()));
   }
+  // (N, 3) and (N, 4) float64 alike without a copy: Ref<const Points3> takes any row stride.
   using Strided = Eigen::Map<const Points3, 0, Eigen::OuterStride<>>;
   const Strided view(a.data(), a.shape(0), 3, Eigen::OuterStride<>(a.shape(1)));
-  const Points3 points = view;  // (N, 4) scans: one copy of the xyz columns
   py::gil_scoped_release release;
-  return l::project_scan(points, camera, o, mask_mat);
+  return l::project_scan(view, camera, o, mask_mat);
 }
 
 py::dict depth_at(const py::handle& keypoints, const l::ScanProjection& scan,

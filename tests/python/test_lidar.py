@@ -146,8 +146,7 @@ def static_mask(labels, frame):
     return mask
 
 
-@pytest.fixture(scope="module")
-def real_pairs():
+def collect_real_pairs():
     """Per frame: (measured disparity, LiDAR depth) of keypoints with both, static only."""
     root = require_real_data("kitti_tracking_lidar") / "training"
     calib = read_calibration(root / "calib" / "0001.txt")
@@ -171,6 +170,11 @@ def real_pairs():
         disparity = m["keypoints"][both, 0] - m["u_right"][both]
         frames.append((disparity, depth["depth"][both]))
     return cam.fx * cam.baseline, frames
+
+
+@pytest.fixture(scope="module")
+def real_pairs():
+    return collect_real_pairs()
 
 
 def band_ratios(fx_b, disparity, z_lidar, offset):

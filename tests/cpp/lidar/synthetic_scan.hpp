@@ -2,7 +2,7 @@
 // Synthetic LiDAR returns generated in the left image: a pixel (u, v) and the depth a scene
 // gives it become a point of frame c (X_c = X_left - t_left). Scan lines are rows of returns
 // every `line_step` px in v and `point_step` px in u, like the HDL-64 in the KITTI image
-// (lines 4-7 px apart, ~1.1 px between returns on a line).
+// (lines 4.2-6.3 px apart, ~2.2 px between returns on a line).
 #include <functional>
 #include <vector>
 
@@ -19,7 +19,7 @@ inline Vec3 point_c_at(const geometry::StereoCamera& cam, double u, double v, do
 // lines start at v0 + line_offset so that tests can place keypoints between lines.
 inline Points3 scan_lines(const geometry::StereoCamera& cam, double u0, double u1, double v0,
                           double v1, const std::function<double(double, double)>& depth_at,
-                          double line_step = 5.0, double point_step = 1.1) {
+                          double line_step = 5.0, double point_step = 2.2) {
   std::vector<Vec3> pts;
   for (double v = v0; v <= v1; v += line_step)
     for (double u = u0; u <= u1; u += point_step) {
