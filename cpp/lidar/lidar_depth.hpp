@@ -34,7 +34,8 @@ struct LidarDepth {
   }
 };
 
-// Depth of one keypoint (pixel uv of the left image).
+// Depth of one keypoint (pixel uv of the left image). `options` must be valid (validate();
+// project_scan and the vector overload check them), the hot loop does not re-check.
 LidarDepth lidar_depth_at(const Vec2& uv, const ScanProjection& scan,
                           const LidarDepthOptions& options);
 
