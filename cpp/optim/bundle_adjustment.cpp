@@ -10,6 +10,7 @@
 #include <string>
 
 #include "geometry/se3.hpp"
+#include "optim/pose_parameterization.hpp"
 #include "optim/problem_builder.hpp"
 #include "optim/stereo_projection.hpp"
 
@@ -92,6 +93,8 @@ class StaticReprojectionTerms {
       kf_ok[k] = T.allFinite() && geometry::is_rigid_transform(T, 1e-3);
     }
     for (size_t j = 0; j < p_.points.size(); ++j) pt_ok[j] = p_.points[j].X_w.allFinite();
+    // every block in one buffer, in the order added: bit-identical results (reserve())
+    b.reserve(static_cast<int>(detail::kPoseSize * p_.keyframes.size() + 3 * p_.points.size()));
 
     for (size_t e = 0; e < p_.observations.size(); ++e) {
       const BAObservation& o = p_.observations[e];

@@ -12,6 +12,10 @@
 namespace twistslam::optim::detail {
 
 namespace {
+// doubles of the first buffer when reserve() was not called: a window of a few object poses
+// and twists fits; a bundle adjustment reserves its exact size
+constexpr int kMinBufferDoubles = 256;
+
 ceres::Problem::Options problem_options() {
   ceres::Problem::Options o;
   o.cost_function_ownership = ceres::TAKE_OWNERSHIP;
@@ -42,22 +46,41 @@ int ProblemBuilder::register_block(double* data, int size, bool is_pose, bool fi
   return static_cast<int>(blocks_.size()) - 1;
 }
 
+void ProblemBuilder::reserve(int num_doubles) {
+  if (num_doubles <= 0) return;
+  if (!storage_.empty() && storage_.back().capacity - storage_.back().used >= num_doubles) return;
+  storage_.push_back({std::make_unique<double[]>(num_doubles), num_doubles, 0});
+}
+
+double* ProblemBuilder::allocate(int size) {
+  if (storage_.empty() || storage_.back().capacity - storage_.back().used < size) {
+    // grow geometrically: a builder used without reserve() stays at a few buffers
+    const int previous = storage_.empty() ? 0 : storage_.back().capacity;
+    reserve(std::max({size, kMinBufferDoubles, 2 * previous}));
+  }
+  Buffer& buffer = storage_.back();
+  double* data = buffer.data.get() + buffer.used;
+  buffer.used += size;
+  return data;
+}
+
 int ProblemBuilder::add_pose(const Mat4& T, bool fixed) {
-  pose_storage_.emplace_back();
-  pose_to_params(T, pose_storage_.back().data());
-  return register_block(pose_storage_.back().data(), kPoseSize, true, fixed, false);
+  double* data = allocate(kPoseSize);
+  pose_to_params(T, data);
+  return register_block(data, kPoseSize, true, fixed, false);
 }
 
 int ProblemBuilder::add_point(const Vec3& X, bool fixed) {
-  point_storage_.push_back({X.x(), X.y(), X.z()});
-  return register_block(point_storage_.back().data(), 3, false, fixed, true);
+  double* data = allocate(3);
+  std::copy(X.data(), X.data() + 3, data);
+  return register_block(data, 3, false, fixed, true);
 }
 
 int ProblemBuilder::add_vector(const double* values, int size, bool fixed, bool eliminate) {
   if (size <= 0) throw std::invalid_argument("ProblemBuilder::add_vector: size must be > 0");
-  vector_storage_.emplace_back(new double[size]);
-  std::copy(values, values + size, vector_storage_.back().get());
-  return register_block(vector_storage_.back().get(), size, false, fixed, eliminate);
+  double* data = allocate(size);
+  std::copy(values, values + size, data);
+  return register_block(data, size, false, fixed, eliminate);
 }
 
 Mat4 ProblemBuilder::pose(int block) const { return params_to_pose(blocks_[block].data); }

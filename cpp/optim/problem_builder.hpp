@@ -18,8 +18,6 @@
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 
-#include <array>
-#include <deque>
 #include <map>
 #include <memory>
 #include <optional>
@@ -61,6 +59,15 @@ class ProblemBuilder {
 
   // Parameter blocks; the builder owns their storage (stable addresses). Each returns a
   // block handle for the add_* functions below.
+  //
+  // Reproducibility: Ceres orders the blocks of an elimination group by address, and that
+  // order decides the summation order of the Schur complement (a different order moved
+  // poses by ~1e-14 m between identical calls). Blocks are carved out of one contiguous
+  // buffer in insertion order, so address order is insertion order as long as they fit:
+  // call reserve() with the total size first (blocks beyond it still work, in a new buffer
+  // whose address, and so order, is up to the heap). Bit-identical also needs one thread:
+  // Ceres' threaded evaluation and elimination sum in scheduling order.
+  void reserve(int num_doubles);
   int add_pose(const Mat4& T, bool fixed);
   int add_point(const Vec3& X, bool fixed);
   // A generic Euclidean block (twist, size, ...); `eliminate` puts it in the Schur
@@ -132,12 +139,17 @@ class ProblemBuilder {
     bool eliminate;
   };
   int register_block(double* data, int size, bool is_pose, bool fixed, bool eliminate);
+  double* allocate(int size);  // `size` doubles from the current buffer (a new one if full)
+
+  struct Buffer {
+    std::unique_ptr<double[]> data;
+    int capacity = 0;
+    int used = 0;
+  };
 
   std::unique_ptr<ceres::Problem> problem_;
   std::unique_ptr<ceres::Manifold> pose_manifold_;
-  std::deque<std::array<double, 7>> pose_storage_;
-  std::deque<std::array<double, 3>> point_storage_;
-  std::vector<std::unique_ptr<double[]>> vector_storage_;
+  std::vector<Buffer> storage_;  // parameter values; earlier buffers stay where they are
   std::vector<Block> blocks_;
   std::map<double, std::unique_ptr<ceres::LossFunction>> losses_;
   std::vector<std::pair<ceres::ResidualBlockId, double>> gated_;
