@@ -4,10 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
 #include <stdexcept>
 #include <string>
 
+#include "features/orb_quadtree.hpp"
 #include "options/option_range.hpp"
 
 namespace twistslam::features {
@@ -37,90 +37,110 @@ float centroid_angle(const cv::Mat& img, int x, int y, const std::vector<int>& h
   return cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
 }
 
-// Quadtree over the candidates of one level: regions are split breadth-first (largest regions
-// first, the most populated first among equals) until there are `wanted` non-empty regions or
-// none can be split; each region then keeps its strongest corner. Returns indices into cand.
-struct QuadNode {
-  float x0, y0, x1, y1;
-  int begin, end;  // range in the index array
-  int depth;
-  int count() const { return end - begin; }
-};
+// Where keypoints of one pyramid level may lie: inside the border region, and where the
+// (level-0) mask, if any, is non-zero.
+struct LevelArea {
+  cv::Rect region;       // level pixels at least kEdgeBorder from the level's edges
+  cv::Size level0;       // size of pyramid level 0
+  float sx, sy;          // level-0 px per level px
+  const cv::Mat& mask;   // level-0 CV_8UC1 or empty
+  cv::Mat level_mask;    // the mask at the level's size (nearest), empty without a mask
 
-struct SplitOrder {  // priority_queue top = shallowest, then most populated
-  bool operator()(const QuadNode& a, const QuadNode& b) const {
-    if (a.depth != b.depth) return a.depth > b.depth;
-    return a.count() < b.count();
+  LevelArea(const cv::Mat& img, const cv::Size& size0, const cv::Mat& mask0)
+      : region(kEdgeBorder, kEdgeBorder, img.cols - 2 * kEdgeBorder, img.rows - 2 * kEdgeBorder),
+        level0(size0),
+        sx(static_cast<float>(size0.width) / img.cols),
+        sy(static_cast<float>(size0.height) / img.rows),
+        mask(mask0) {
+    if (!mask.empty() && region.width > 0 && region.height > 0)
+      cv::resize(mask, level_mask, img.size(), 0, 0, cv::INTER_NEAREST);
+  }
+  cv::Point2f to_level0(const cv::Point2f& p) const {
+    return {(p.x + 0.5f) * sx - 0.5f, (p.y + 0.5f) * sy - 0.5f};
+  }
+  bool allows(const cv::Point2f& p) const {
+    if (!region.contains(cv::Point(cvRound(p.x), cvRound(p.y)))) return false;
+    if (mask.empty()) return true;
+    const cv::Point2f q = to_level0(p);
+    const int u = std::clamp(cvRound(q.x), 0, level0.width - 1);
+    const int v = std::clamp(cvRound(q.y), 0, level0.height - 1);
+    return mask.at<std::uint8_t>(v, u) != 0;
   }
 };
 
-std::vector<int> distribute(const std::vector<cv::KeyPoint>& cand, const cv::Rect2f& region,
-                            int wanted) {
-  std::vector<int> keep;
-  if (wanted <= 0 || cand.empty()) return keep;
-  std::vector<int> idx(cand.size());
-  for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<int>(i);
+// FAST corners (with non-maximum suppression) of `img` inside `roi`, in level coordinates.
+void fast_in(const cv::Mat& img, const cv::Rect& roi, int threshold, std::vector<cv::KeyPoint>* out) {
+  out->clear();
+  cv::FAST(img(roi), *out, threshold, true);
+  const cv::Point2f offset(static_cast<float>(roi.x), static_cast<float>(roi.y));
+  for (cv::KeyPoint& k : *out) k.pt += offset;
+}
 
-  std::vector<QuadNode> leaves;  // regions that cannot or need not be split
-  std::priority_queue<QuadNode, std::vector<QuadNode>, SplitOrder> open;
-  auto add = [&](const QuadNode& n) {
-    if (n.count() == 0) return;
-    const bool splittable = n.count() > 1 && (n.x1 - n.x0 > 1.0f || n.y1 - n.y0 > 1.0f);
-    if (splittable) open.push(n); else leaves.push_back(n);
-  };
+// Step 1: FAST at the normal threshold over the whole level; the allowed corners.
+void detect_corners(const cv::Mat& img, const LevelArea& area, int threshold,
+                    std::vector<cv::KeyPoint>* candidates) {
+  // FAST tests a ring of radius 3: a 3-px margin around the region is all it needs.
+  const cv::Rect& r = area.region;
+  fast_in(img, cv::Rect(r.x - 3, r.y - 3, r.width + 6, r.height + 6), threshold, candidates);
+  candidates->erase(std::remove_if(candidates->begin(), candidates->end(),
+                                   [&](const cv::KeyPoint& k) { return !area.allows(k.pt); }),
+                    candidates->end());
+}
 
-  // Roots: about square columns over the region, so that splits give square cells.
-  const int roots = std::max(1, static_cast<int>(std::lround(region.width / region.height)));
-  {
-    int begin = 0;
-    const float w = region.width / roots;
-    for (int r = 0; r < roots; ++r) {
-      const float x0 = region.x + r * w, x1 = (r + 1 == roots) ? region.x + region.width : x0 + w;
-      auto mid = std::partition(idx.begin() + begin, idx.end(),
-                                [&](int i) { return cand[i].pt.x < x1 || r + 1 == roots; });
-      const int end = static_cast<int>(mid - idx.begin());
-      add({x0, region.y, x1, region.y + region.height, begin, end, 0});
-      begin = end;
+// Step 2: grid cells of about cell_size px that step 1 left without a corner are searched
+// again with the low threshold, so that low-contrast parts of the image contribute too.
+void retry_empty_cells(const cv::Mat& img, const LevelArea& area, int cell_size,
+                       int min_threshold, std::vector<cv::KeyPoint>* candidates) {
+  const cv::Rect& region = area.region;
+  const int cols = std::max(1, static_cast<int>(std::lround(static_cast<double>(region.width) / cell_size)));
+  const int rows = std::max(1, static_cast<int>(std::lround(static_cast<double>(region.height) / cell_size)));
+  const float cw = static_cast<float>(region.width) / cols;
+  const float ch = static_cast<float>(region.height) / rows;
+  std::vector<int> per_cell(static_cast<std::size_t>(cols) * rows, 0);
+  for (const cv::KeyPoint& k : *candidates) {
+    const int cx = std::min(cols - 1, static_cast<int>((k.pt.x - region.x) / cw));
+    const int cy = std::min(rows - 1, static_cast<int>((k.pt.y - region.y) / ch));
+    ++per_cell[static_cast<std::size_t>(cy) * cols + cx];
+  }
+  std::vector<cv::KeyPoint> cell_corners;
+  for (int cy = 0; cy < rows; ++cy) {
+    for (int cx = 0; cx < cols; ++cx) {
+      if (per_cell[static_cast<std::size_t>(cy) * cols + cx] > 0) continue;
+      const int x0 = region.x + static_cast<int>(std::lround(cx * cw));
+      const int x1 = region.x + static_cast<int>(std::lround((cx + 1) * cw));
+      const int y0 = region.y + static_cast<int>(std::lround(cy * ch));
+      const int y1 = region.y + static_cast<int>(std::lround((cy + 1) * ch));
+      const cv::Rect cell(x0, y0, x1 - x0, y1 - y0);
+      if (cell.area() <= 0) continue;
+      if (!area.level_mask.empty() && cv::countNonZero(area.level_mask(cell)) == 0) continue;
+      // FAST needs 3 px around a pixel
+      const cv::Rect roi = cv::Rect(x0 - 3, y0 - 3, cell.width + 6, cell.height + 6) &
+                           cv::Rect(0, 0, img.cols, img.rows);
+      fast_in(img, roi, min_threshold, &cell_corners);
+      for (const cv::KeyPoint& k : cell_corners)
+        if (cell.contains(cv::Point(cvRound(k.pt.x), cvRound(k.pt.y))) && area.allows(k.pt))
+          candidates->push_back(k);
     }
   }
+}
 
-  auto regions = [&] { return static_cast<int>(open.size() + leaves.size()); };
-  while (!open.empty() && regions() < wanted) {
-    const QuadNode n = open.top();
-    open.pop();
-    const float mx = 0.5f * (n.x0 + n.x1), my = 0.5f * (n.y0 + n.y1);
-    auto first = idx.begin() + n.begin, last = idx.begin() + n.end;
-    auto split_x = std::partition(first, last, [&](int i) { return cand[i].pt.x < mx; });
-    auto split_l = std::partition(first, split_x, [&](int i) { return cand[i].pt.y < my; });
-    auto split_r = std::partition(split_x, last, [&](int i) { return cand[i].pt.y < my; });
-    const int a = n.begin, b = static_cast<int>(split_l - idx.begin()),
-              c = static_cast<int>(split_x - idx.begin()),
-              d = static_cast<int>(split_r - idx.begin()), e = n.end;
-    const int depth = n.depth + 1;
-    add({n.x0, n.y0, mx, my, a, b, depth});
-    add({n.x0, my, mx, n.y1, b, c, depth});
-    add({mx, n.y0, n.x1, my, c, d, depth});
-    add({mx, my, n.x1, n.y1, d, e, depth});
+// Step 4 (after the quadtree of step 3): the kept candidates with their orientation, set up
+// for cv::ORB::compute on this level (octave 0 there, the patch size of the level).
+std::vector<cv::KeyPoint> oriented_keypoints(const cv::Mat& img,
+                                             const std::vector<cv::KeyPoint>& candidates,
+                                             const std::vector<int>& keep,
+                                             const std::vector<int>& half_width) {
+  std::vector<cv::KeyPoint> chosen;
+  chosen.reserve(keep.size());
+  for (int i : keep) {
+    cv::KeyPoint k = candidates[i];
+    k.octave = 0;  // level-local for cv::ORB::compute
+    k.size = static_cast<float>(kPatchSize);
+    k.class_id = -1;
+    k.angle = centroid_angle(img, cvRound(k.pt.x), cvRound(k.pt.y), half_width);
+    chosen.push_back(k);
   }
-  while (!open.empty()) {
-    leaves.push_back(open.top());
-    open.pop();
-  }
-
-  keep.reserve(leaves.size());
-  for (const QuadNode& n : leaves) {
-    int best = idx[n.begin];
-    for (int k = n.begin + 1; k < n.end; ++k)
-      if (cand[idx[k]].response > cand[best].response) best = idx[k];
-    keep.push_back(best);
-  }
-  if (static_cast<int>(keep.size()) > wanted) {  // the last split may overshoot by up to 3
-    std::nth_element(keep.begin(), keep.begin() + wanted, keep.end(),
-                     [&](int i, int j) { return cand[i].response > cand[j].response; });
-    keep.resize(wanted);
-  }
-  std::sort(keep.begin(), keep.end());  // deterministic, roughly raster order
-  return keep;
+  return chosen;
 }
 
 }  // namespace
@@ -191,8 +211,7 @@ Keypoints OrbExtractor::extract(const cv::Mat& gray, const cv::Mat& mask) const 
   if (gray.empty()) throw std::invalid_argument("OrbExtractor::extract: empty image");
   if (gray.type() != CV_8UC1)
     throw std::invalid_argument("OrbExtractor::extract: expected a CV_8UC1 image (see to_gray)");
-  const bool masked = !mask.empty();
-  if (masked && (mask.type() != CV_8UC1 || mask.size() != gray.size()))
+  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != gray.size()))
     throw std::invalid_argument("OrbExtractor::extract: mask must be CV_8UC1 of the image size");
 
   Keypoints out;
@@ -209,86 +228,22 @@ Keypoints OrbExtractor::extract(const cv::Mat& gray, const cv::Mat& mask) const 
                                            options_.fast_threshold);
   std::vector<cv::Mat> level_descriptors;
   out.keypoints.reserve(options_.num_features);
-  const cv::Size size0 = gray.size();
-  std::vector<cv::KeyPoint> cand, cell_kps, chosen;
+  std::vector<cv::KeyPoint> candidates;
   int carry = 0;  // keypoints a level could not supply are asked from the next one
 
   for (int l = 0; l < static_cast<int>(out.pyramid.size()); ++l) {
     const cv::Mat& img = out.pyramid[l];
     const int wanted = per_level_[l] + carry;
     carry = wanted;
-    const cv::Rect region(kEdgeBorder, kEdgeBorder, img.cols - 2 * kEdgeBorder,
-                          img.rows - 2 * kEdgeBorder);
-    if (wanted <= 0 || region.width <= 0 || region.height <= 0) continue;
+    if (wanted <= 0) continue;
+    const LevelArea area(img, gray.size(), mask);
+    if (area.region.width <= 0 || area.region.height <= 0) continue;
 
-    const float sx = static_cast<float>(size0.width) / img.cols;
-    const float sy = static_cast<float>(size0.height) / img.rows;
-    auto allowed = [&](const cv::Point2f& p) {
-      if (!region.contains(cv::Point(cvRound(p.x), cvRound(p.y)))) return false;
-      if (!masked) return true;
-      const int u = std::clamp(cvRound((p.x + 0.5f) * sx - 0.5f), 0, size0.width - 1);
-      const int v = std::clamp(cvRound((p.y + 0.5f) * sy - 0.5f), 0, size0.height - 1);
-      return mask.at<std::uint8_t>(v, u) != 0;
-    };
-
-    // FAST at the normal threshold over the whole level, then the grid.
-    // FAST tests a ring of radius 3: a 3-px margin around the region is all it needs.
-    const cv::Rect scan(region.x - 3, region.y - 3, region.width + 6, region.height + 6);
-    cand.clear();
-    cv::FAST(img(scan), cand, options_.fast_threshold, true);
-    for (cv::KeyPoint& k : cand) k.pt += cv::Point2f(static_cast<float>(scan.x), static_cast<float>(scan.y));
-    cand.erase(std::remove_if(cand.begin(), cand.end(),
-                              [&](const cv::KeyPoint& k) { return !allowed(k.pt); }),
-               cand.end());
-    const int cols = std::max(1, static_cast<int>(std::lround(
-                                     static_cast<double>(region.width) / options_.cell_size)));
-    const int rows = std::max(1, static_cast<int>(std::lround(
-                                     static_cast<double>(region.height) / options_.cell_size)));
-    const float cw = static_cast<float>(region.width) / cols;
-    const float ch = static_cast<float>(region.height) / rows;
-    std::vector<int> per_cell(static_cast<std::size_t>(cols) * rows, 0);
-    for (const cv::KeyPoint& k : cand) {
-      const int cx = std::min(cols - 1, static_cast<int>((k.pt.x - region.x) / cw));
-      const int cy = std::min(rows - 1, static_cast<int>((k.pt.y - region.y) / ch));
-      ++per_cell[static_cast<std::size_t>(cy) * cols + cx];
-    }
-    // Cells without a corner: retry with the low threshold (FAST needs 3 px around a pixel).
-    cv::Mat level_mask;
-    if (masked) cv::resize(mask, level_mask, img.size(), 0, 0, cv::INTER_NEAREST);
-    for (int cy = 0; cy < rows; ++cy) {
-      for (int cx = 0; cx < cols; ++cx) {
-        if (per_cell[static_cast<std::size_t>(cy) * cols + cx] > 0) continue;
-        const int x0 = region.x + static_cast<int>(std::lround(cx * cw));
-        const int x1 = region.x + static_cast<int>(std::lround((cx + 1) * cw));
-        const int y0 = region.y + static_cast<int>(std::lround(cy * ch));
-        const int y1 = region.y + static_cast<int>(std::lround((cy + 1) * ch));
-        const cv::Rect cell(x0, y0, x1 - x0, y1 - y0);
-        if (cell.area() <= 0) continue;
-        if (masked && cv::countNonZero(level_mask(cell)) == 0) continue;
-        const cv::Rect roi = cv::Rect(x0 - 3, y0 - 3, cell.width + 6, cell.height + 6) &
-                             cv::Rect(0, 0, img.cols, img.rows);
-        cell_kps.clear();
-        cv::FAST(img(roi), cell_kps, options_.min_fast_threshold, true);
-        for (cv::KeyPoint k : cell_kps) {
-          k.pt.x += roi.x;
-          k.pt.y += roi.y;
-          if (cell.contains(cv::Point(cvRound(k.pt.x), cvRound(k.pt.y))) && allowed(k.pt))
-            cand.push_back(k);
-        }
-      }
-    }
-
-    const std::vector<int> keep = distribute(cand, cv::Rect2f(region), wanted);
-    chosen.clear();
-    chosen.reserve(keep.size());
-    for (int i : keep) {
-      cv::KeyPoint k = cand[i];
-      k.octave = 0;  // level-local for cv::ORB::compute
-      k.size = static_cast<float>(kPatchSize);
-      k.class_id = -1;
-      k.angle = centroid_angle(img, cvRound(k.pt.x), cvRound(k.pt.y), circle_half_width_);
-      chosen.push_back(k);
-    }
+    detect_corners(img, area, options_.fast_threshold, &candidates);
+    retry_empty_cells(img, area, options_.cell_size, options_.min_fast_threshold, &candidates);
+    std::vector<cv::KeyPoint> chosen = oriented_keypoints(
+        img, candidates, detail::distribute_keypoints(candidates, cv::Rect2f(area.region), wanted),
+        circle_half_width_);
     if (chosen.empty()) continue;
     cv::Mat desc;
     brief->compute(img, chosen, desc);  // drops nothing: every keypoint is >= 19 px inside
@@ -297,7 +252,7 @@ Keypoints OrbExtractor::extract(const cv::Mat& gray, const cv::Mat& mask) const 
     carry = wanted - static_cast<int>(chosen.size());
 
     for (cv::KeyPoint k : chosen) {
-      k.pt = cv::Point2f((k.pt.x + 0.5f) * sx - 0.5f, (k.pt.y + 0.5f) * sy - 0.5f);
+      k.pt = area.to_level0(k.pt);
       k.octave = l;
       k.size = kPatchSize * scale_[l];
       out.keypoints.push_back(k);
