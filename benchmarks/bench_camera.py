@@ -1,4 +1,5 @@
-"""Camera accuracy and speed of twistslam (stereo) side by side with KISS-ICP and small_gicp (LiDAR).
+"""Camera accuracy and speed of twistslam (stereo, and stereo + LiDAR depth when the sequence
+has scans) side by side with KISS-ICP and small_gicp (LiDAR).
 
     .venv/bin/python benchmarks/bench_camera.py                        # cached urban-seed0-n100
     .venv/bin/python benchmarks/bench_camera.py --sweep --memory       # + ORB / BA sweep, peak RSS
@@ -140,7 +141,15 @@ def run_ours(sequence, config, n: int) -> dict:
         "lost": result.num_lost,
         "keyframes": int(result.is_keyframe.sum()),
         "map_points": len(result.map_points.get("X_w", ())),
+        "lidar_ms": summary["stages"].get("lidar_depth"),
+        "offset": result.disparity_offset,
+        "offset_source": result.disparity_offset_source,
+        "path_ratio": path_length(result.camera_poses) / path_length(sequence.gt_poses[result.frames]),
     }
+
+
+def path_length(poses: np.ndarray) -> float:
+    return float(np.linalg.norm(np.diff(poses[:, :3, 3], axis=0), axis=1).sum())
 
 
 def lidar_scans(sequence, n: int):
@@ -223,6 +232,7 @@ def run_lidar_peer(sequence, n: int, poses_fn) -> dict:
         "wall_s": wall,
         "load": load1(),
         "read_ms": float(np.median(read_ms)),
+        "path_ratio": path_length(est) / path_length(sequence.gt_poses[:n]),
     }
 
 
@@ -371,11 +381,19 @@ def main(argv=None) -> int:
     print(f"{os.cpu_count()} cores, load average {'/'.join(f'{x:.2f}' for x in os.getloadavg())} "
           f"(1/5/15 min) at start")
 
-    ours = run_ours(sequence, config, n)
+    # LiDAR depth on (the default when the sequence has scans) and off, side by side
+    has_scans = (sequence.base / "velodyne" / sequence.seq).is_dir()
+    stereo_config, _ = make_config(sequence, [*args.set, "lidar.use_depth=false"], args.max_frames)
+    stereo_only = run_ours(sequence, stereo_config, n)
+    ours = run_ours(sequence, config, n) if config.lidar.use_depth and has_scans else stereo_only
     peers = [("KISS-ICP (LiDAR)", run_lidar_peer(sequence, n, kiss_poses)),
              ("small_gicp (LiDAR)", run_lidar_peer(sequence, n, gicp_poses))]
     print(f"\ncamera trajectory vs ground truth ({n} frames)")
-    print_table("system", [("twistslam (stereo)", ours), *peers])
+    own_rows = [("twistslam (stereo)", stereo_only)]
+    if ours is not stereo_only:
+        own_rows.append(("twistslam (+LiDAR dep)", ours))
+    print_table("system", [*own_rows, *peers],
+                [("path/gt", 7, lambda r: f"{r['path_ratio']:.4f}")])
     om = ours["metrics"]
     for name, peer in peers:
         pm = peer["metrics"]
@@ -386,7 +404,12 @@ def main(argv=None) -> int:
               f"(ratios ours/peer: RPE_t {om.rpe_t_mean / pm.rpe_t_mean:.2f}, "
               f"RPE_R {om.rpe_r_mean / pm.rpe_r_mean:.2f}, ATE {om.ate_rmse / pm.ate_rmse:.2f})")
     print(f"twistslam: {ours['lost']} lost, {ours['keyframes']} keyframes, "
-          f"{ours['map_points']} map points")
+          f"{ours['map_points']} map points; disparity offset {ours['offset']:+.3f} px "
+          f"({ours['offset_source']})")
+    if ours is not stereo_only and ours["lidar_ms"] is not None:
+        print(f"LiDAR depth stage (projection + association): median {ours['lidar_ms']:.2f} ms "
+              f"per frame = {100 * ours['lidar_ms'] / ours['median_ms']:.1f} % of the loop's "
+              f"{ours['median_ms']:.1f} ms (stereo only: {stereo_only['median_ms']:.1f} ms)")
     print(f"ms/f: twistslam = loop wall time per frame (reading overlapped); LiDAR peers = "
           f"registration only (KISS-ICP register_frame; small_gicp preprocess + align), reading "
           f"a scan is a median {peers[0][1]['read_ms']:.1f} ms more. CPU ms/f = process CPU "

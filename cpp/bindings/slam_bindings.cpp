@@ -34,7 +34,7 @@ py::dict to_dict(const t::TrackResult& r) {
   return py::dict("status"_a = t::to_string(r.status), "T_w_c"_a = to_numpy(r.T_w_c),
                   "is_keyframe"_a = r.is_keyframe, "num_inliers"_a = r.num_inliers,
                   "num_map_points"_a = r.num_map_points, "num_keyframes"_a = r.num_keyframes,
-                  "timings_ms"_a = timings);
+                  "num_lidar_depth"_a = r.num_lidar_depth, "timings_ms"_a = timings);
 }
 
 }  // namespace
@@ -59,8 +59,10 @@ options : dict
 )doc")
       .def("track",
            [](t::System& s, int index, double timestamp, const py::array& left, const py::array& right,
-              const py::object& labels) {
+              const py::object& labels, const py::object& points_c) {
              const cv::Mat l = image_view(left, "image_left", false);
+             Points3 scan;
+             if (!points_c.is_none()) scan = points_view(as_rows(points_c, "points_c", 3));
              const cv::Mat r = image_view(right, "image_right", false);
              py::array label_array;
              cv::Mat lab;
@@ -72,7 +74,7 @@ options : dict
              {
                py::gil_scoped_release release;
                try {
-                 result = s.track(index, timestamp, l, r, lab);
+                 result = s.track(index, timestamp, l, r, lab, scan);
                } catch (const std::invalid_argument& e) {
                  py::gil_scoped_acquire acquire;
                  throw py::value_error("frame " + std::to_string(index) + ": " + e.what());
@@ -81,6 +83,7 @@ options : dict
              return to_dict(result);
            },
            "index"_a, "timestamp"_a, "image_left"_a, "image_right"_a, "labels"_a = py::none(),
+           "points_c"_a = py::none(),
            R"doc(Track one stereo frame.
 
 Parameters
@@ -93,12 +96,17 @@ image_left, image_right : ndarray
     uint8 (H, W) gray or (H, W, 3) colour, C-contiguous, of the camera's size.
 labels : ndarray of int32 (H, W), optional
     Semantic class id per pixel; keypoints on ``tracking.dynamic_class_ids`` never track the camera.
+points_c : ndarray (N, 3) float, optional
+    The frame's LiDAR scan in the rectified reference camera frame c. With
+    ``lidar.use_depth`` keypoints near its returns take their depth from it (returns on
+    dynamic classes are dropped; non-finite points are skipped). None or (0, 3): stereo only.
 
 Returns
 -------
 dict
     status ("initialized", "ok", "lost", "relocalized"), T_w_c (4, 4), is_keyframe,
-    num_inliers, num_map_points, num_keyframes, timings_ms {stage: ms}.
+    num_inliers, num_map_points, num_keyframes, num_lidar_depth (keypoints with a LiDAR
+    depth), timings_ms {stage: ms}.
 )doc")
       .def("trajectory",
            [](const t::System& s) {

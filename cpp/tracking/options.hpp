@@ -8,6 +8,7 @@
 #include "features/orb.hpp"
 #include "features/stereo.hpp"
 #include "features/stereo_option_ranges.hpp"
+#include "tracking/lidar_keypoint_depth.hpp"
 
 namespace twistslam::tracking {
 
@@ -64,6 +65,7 @@ struct SlamOptions {
   KeyframeOptions keyframes;
   LocalBAOptions local_ba;
   MapOptions map;
+  LidarOptions lidar;  // keypoint depth from a frame's scan (tracking/lidar_keypoint_depth.hpp)
 };
 
 // Each section's fields with their valid ranges (inclusive, the field's unit), visited as
@@ -131,6 +133,7 @@ void for_each_section(SlamOptions& o, VisitSection&& visit) {
   visit("keyframes", o.keyframes);
   visit("local_ba", o.local_ba);
   visit("map", o.map);
+  visit("lidar", o.lidar);
 }
 
 // Throws std::invalid_argument naming the option ("tracking.search_radius_px = inf is out of

@@ -67,7 +67,7 @@ void System::reset() {
 }
 
 Frame System::build_frame(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
-                          const cv::Mat& labels, TrackResult* result) {
+                          const cv::Mat& labels, const Points3& points_c, TrackResult* result) {
   check_image(left, "image_left", camera_);
   check_image(right, "image_right", camera_);
   if (left.size() != right.size()) throw std::invalid_argument("image_right: size differs from image_left");
@@ -106,6 +106,24 @@ Frame System::build_frame(int index, double timestamp, const cv::Mat& left, cons
       frame.usable[i] = !dynamic_classes_.count(k.label[i]);  // eq. 3: static clusters only
     }
   }
+  if (options_.lidar.use_depth && points_c.rows() > 0) {
+    const auto start = std::chrono::steady_clock::now();
+    cv::Mat static_mask;  // 0 on a-priori dynamic classes: their returns are never used
+    if (!labels.empty() && !dynamic_classes_.empty()) {
+      static_mask.create(labels.size(), CV_8UC1);
+      for (int v = 0; v < labels.rows; ++v) {
+        const int* l = labels.ptr<int>(v);
+        std::uint8_t* m = static_mask.ptr<std::uint8_t>(v);
+        for (int u = 0; u < labels.cols; ++u) m[u] = dynamic_classes_.count(l[u]) ? 0 : 255;
+      }
+    }
+    const LidarDepthStats stats =
+        apply_lidar_depth(points_c, camera_, options_.lidar, static_mask, frame.usable, k);
+    lidar_depth_keypoints_ = stats.num_replaced + stats.num_added;
+    result->timings_ms.emplace_back(
+        "lidar_depth",
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
   frame.clear_matches();
   frame.grid.build(frame.keypoints.uv, left.cols, left.rows);
   return frame;
@@ -117,9 +135,11 @@ Mat4 System::predicted_pose() const {
 }
 
 TrackResult System::track(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
-                          const cv::Mat& labels) {
+                          const cv::Mat& labels, const Points3& points_c) {
   TrackResult result;
-  Frame frame = build_frame(index, timestamp, left, right, labels, &result);
+  lidar_depth_keypoints_ = 0;
+  Frame frame = build_frame(index, timestamp, left, right, labels, points_c, &result);
+  result.num_lidar_depth = lidar_depth_keypoints_;
   StageTimer timer(&result);
   frame.T_c_w = predicted_pose();
   bool tracked = false;

@@ -27,6 +27,7 @@ struct TrackResult {
   int num_inliers = 0;
   int num_map_points = 0;
   int num_keyframes = 0;
+  int num_lidar_depth = 0;  // keypoints that took their depth from the scan
   std::vector<std::pair<std::string, double>> timings_ms;  // stage -> ms, in pipeline order
 };
 
@@ -45,9 +46,11 @@ class System {
   System(const geometry::StereoCamera& camera, const SlamOptions& options);
 
   // left / right: CV_8UC1 or CV_8UC3 (RGB, as numpy images are) of the camera's size;
-  // labels: empty or CV_32SC1 class ids per pixel. Throws std::invalid_argument on bad sizes.
+  // labels: empty or CV_32SC1 class ids per pixel; points_c: the frame's LiDAR scan (N x 3,
+  // frame c; empty: none), used for keypoint depth when options.lidar.use_depth.
+  // Throws std::invalid_argument on bad sizes.
   TrackResult track(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
-                    const cv::Mat& labels = cv::Mat());
+                    const cv::Mat& labels = cv::Mat(), const Points3& points_c = Points3());
 
   // T_w_c of every frame tracked so far, refined through the keyframes.
   std::vector<std::pair<TrajectoryEntry, Mat4>> trajectory() const;
@@ -57,7 +60,7 @@ class System {
 
  private:
   Frame build_frame(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
-                    const cv::Mat& labels, TrackResult* result);
+                    const cv::Mat& labels, const Points3& points_c, TrackResult* result);
   Mat4 predicted_pose() const;
   // camera_tracking.cpp
   bool track_with_motion_model(Frame& frame, double radius_scale);
@@ -94,6 +97,7 @@ class System {
   std::vector<int> local_keyframes_;
   std::vector<TrajectoryEntry> trajectory_;
   double last_ba_ms_ = 0;  // wall time of the local BA of the last inserted keyframe
+  int lidar_depth_keypoints_ = 0;  // keypoints with a LiDAR depth in the frame being built
 };
 
 }  // namespace twistslam::tracking

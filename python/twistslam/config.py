@@ -28,6 +28,8 @@ from typing import Any
 from twistslam._core import slam as _core_slam
 
 from ._settings import coerce, param
+from .config_lidar import PYTHON_ONLY as _LIDAR_PYTHON_ONLY
+from .config_lidar import LidarConfig
 from .config_objects import ObjectsConfig
 
 
@@ -174,6 +176,7 @@ SECTIONS: dict[str, type] = {
     "map": MapConfig,
     "run": RunConfig,
     "objects": ObjectsConfig,
+    "lidar": LidarConfig,
 }
 #: sections the SLAM system does not read (the object tracker reads ``objects`` itself)
 _NOT_FOR_CORE = ("run", "objects")
@@ -197,6 +200,7 @@ class Config:
     map: MapConfig = field(default_factory=MapConfig)
     run: RunConfig = field(default_factory=RunConfig)
     objects: ObjectsConfig = field(default_factory=ObjectsConfig)
+    lidar: LidarConfig = field(default_factory=LidarConfig)
 
     def __post_init__(self) -> None:
         self.validate()
@@ -297,6 +301,7 @@ class Config:
             _core_slam.check_options(self.to_options())
         except ValueError as exc:
             raise ValueError(str(exc).removeprefix("options: ")) from None
+        self.lidar.validate()
 
     # ---------------------------------------------------------------------- output
     def to_dict(self) -> dict[str, dict[str, Any]]:
@@ -309,7 +314,10 @@ class Config:
 
     def to_options(self) -> dict[str, dict[str, Any]]:
         """The nested options dictionary the C++ core reads (every section but ``run``)."""
-        return {k: v for k, v in self.to_dict().items() if k not in _NOT_FOR_CORE}
+        options = {k: v for k, v in self.to_dict().items() if k not in _NOT_FOR_CORE}
+        for key in _LIDAR_PYTHON_ONLY:  # resolved in Python (twistslam.camera_lidar)
+            options["lidar"].pop(key)
+        return options
 
     def to_yaml(self, path: str | Path | None = None) -> str:
         """YAML text of every setting, each with its unit and reason as a comment; written to

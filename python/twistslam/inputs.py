@@ -49,8 +49,9 @@ def check_stereo(sequence: Sequence) -> None:
             )
 
 
-def load_frame(sequence: Sequence, index: int) -> Frame:
-    """Frame ``index`` with both images present and readable.
+def load_frame(sequence: Sequence, index: int, *, lidar: bool = False) -> Frame:
+    """Frame ``index`` with both images present and readable; its LiDAR scan too when
+    ``lidar`` (``None`` where the frame has none: tracking then uses stereo depth alone).
 
     Raises
     ------
@@ -64,9 +65,9 @@ def load_frame(sequence: Sequence, index: int) -> Frame:
             # a missing image is raised below with the frame's name; missing LiDAR is
             # already reported once when the sequence is opened
             warnings.simplefilter("ignore", MissingDataWarning)
-            # the stereo pipeline reads no LiDAR; sequences without frame() load everything
+            # the scan is read only when used; sequences without frame() load everything
             read = getattr(sequence, "frame", None)
-            frame = read(index, lidar=False) if callable(read) else sequence[index]
+            frame = read(index, lidar=lidar) if callable(read) else sequence[index]
     except (OSError, ValueError) as exc:
         raise ValueError(f"frame {index}: {_unreadable(sequence, index) or exc}") from exc
     for folder, side in CAMERAS.items():

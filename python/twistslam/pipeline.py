@@ -20,6 +20,7 @@ import numpy as np
 from .config import Config
 from .datasets import Frame, Sequence, open_sequence
 from .inputs import PanopticLabels, check_stereo, load_frame
+from .input_checks import check_first_frames
 from .progress import RateBar
 from .result import Result
 from .slam import Slam
@@ -46,14 +47,15 @@ def _config(config: Config | str | Path | dict | None) -> Config:
     return Config.from_yaml(config)
 
 
-def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | None
-                ) -> Iterator[tuple[Frame, np.ndarray | None, float]]:
+def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | None,
+                lidar: bool = False) -> Iterator[tuple[Frame, np.ndarray | None, float]]:
     """``(frame, class_ids, load_ms)`` per index; frame i+1 is read in a background thread
     while the caller tracks frame i (decoding the PNGs costs about as much as tracking, and
     both the decoder and the core release the GIL)."""
     def load(i: int):
         start = time.perf_counter()
-        frame = load_frame(sequence, i)
+        # the first frame's scan also serves the "auto" disparity offset (twistslam.camera_lidar)
+        frame = load_frame(sequence, i, lidar=lidar or i == indices[0])
         class_ids = labels.read(i) if labels is not None else None
         return frame, class_ids, (time.perf_counter() - start) * 1e3
 
@@ -107,6 +109,7 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     config = _config(config)
     check_stereo(sequence)
     indices = frame_range(config, len(sequence))
+    check_first_frames(sequence, indices)  # resized images, identical or swapped cameras
     labels = None
     if config.run.use_labels and config.tracking.dynamic_class_ids:
         # only worth reading when some classes are masked
@@ -121,7 +124,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     tracked, stages, frame_ms = [], [], []
     with RateBar(len(indices), f"seq {name}" if name else "run", enabled=progress) as bar:
         last = time.perf_counter()
-        for frame, class_ids, load_ms in _prefetched(sequence, indices, labels):
+        for frame, class_ids, load_ms in _prefetched(sequence, indices, labels,
+                                                     lidar=config.lidar.use_depth):
             out = slam.track(frame, class_ids)
             now = time.perf_counter()
             frame_ms.append((now - last) * 1e3)
@@ -140,6 +144,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         num_inliers=np.array([t.num_inliers for t in tracked], dtype=np.int64),
         timings=Timings.from_frames(stages, frame_ms),
         keyframes=slam.keyframes(),
+        disparity_offset=slam.disparity_offset,
+        disparity_offset_source=slam.disparity_offset_source,
         map_points=slam.map_points(),
         config=config,
         seq=name,

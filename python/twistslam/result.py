@@ -49,6 +49,10 @@ class Result:
     map_points: dict[str, np.ndarray] = field(default_factory=dict)
     config: Config = field(default_factory=Config)
     seq: str | None = None
+    #: px the run added to every stereo disparity (config lidar.disparity_offset; "auto" is
+    #: estimated from the first frame's scan) and where it came from
+    disparity_offset: float | None = None
+    disparity_offset_source: str = ""
 
     def __len__(self) -> int:
         return len(self.frames)

@@ -40,6 +40,7 @@ class TrackedFrame:
     num_inliers: int = 0
     num_map_points: int = 0
     num_keyframes: int = 0
+    num_lidar_depth: int = 0  # keypoints that took their depth from the LiDAR scan
     timings_ms: dict[str, float] = field(default_factory=dict)
 
 
@@ -89,20 +90,48 @@ class Slam:
         self.image_size = tuple(image_size) if image_size is not None else None
         self._system = None
         self._last: list[np.ndarray] = []  # the last two poses, for a fallback prediction
+        #: the stereo pair's disparity offset the run uses (px; config ``lidar.disparity_offset``,
+        #: "auto" resolved at the first frame) and how it was obtained
+        self.disparity_offset: float | None = self.config.lidar.fixed_disparity_offset()
+        self.disparity_offset_source = "config" if self.disparity_offset is not None else ""
 
     @property
     def camera(self):
-        """The ``StereoCamera`` the core uses (``None`` before the image size is known)."""
+        """The ``StereoCamera`` the core uses (``None`` before the image size is known), with
+        the disparity offset once it is known."""
         if self.image_size is None:
             return None
         if isinstance(self.calibration, Calibration):
-            return self.calibration.stereo_camera(*self.image_size)
-        return self.calibration
+            camera = self.calibration.stereo_camera(*self.image_size)
+        else:
+            camera = self.calibration
+        if self.disparity_offset is not None and self.disparity_offset != camera.disparity_offset:
+            camera = camera.with_disparity_offset(self.disparity_offset)
+        return camera
 
-    def _system_for(self, width: int, height: int):
+    def _resolve_disparity_offset(self, frame: Frame, labels: np.ndarray | None) -> None:
+        """``lidar.disparity_offset = "auto"``: estimated from the first frame when it has a
+        scan (docs/camera_scale.md), else the camera's own (0 from a calibration: trusted)."""
+        if self.disparity_offset is not None:
+            return
+        from .camera_lidar import estimate_offset
+
+        estimate = estimate_offset(frame, self.camera, self.config, labels)
+        if estimate.valid:
+            self.disparity_offset = estimate.offset_px
+            self.disparity_offset_source = (
+                f"LiDAR, frame {frame.index}: median of {estimate.num_samples} keypoints, "
+                f"MAD {estimate.mad_px:.2f} px")
+        else:
+            self.disparity_offset = float(self.camera.disparity_offset)
+            self.disparity_offset_source = f"none ({estimate.reason}): calibration trusted"
+
+    def _system_for(self, frame: Frame, labels: np.ndarray | None):
         if self._system is None:
             if self.image_size is None:
+                height, width = np.asarray(frame.image_left).shape[:2]
                 self.image_size = (width, height)
+            self._resolve_disparity_offset(frame, labels)
             self._system = _new_system(self.camera, self.config.to_options())
         return self._system
 
@@ -140,10 +169,13 @@ class Slam:
             if labels.shape != (height, width):
                 raise ValueError(f"frame {i}: labels of shape {labels.shape}, expected "
                                  f"{(height, width)}")
-        system = self._system_for(width, height)
+        system = self._system_for(frame, labels)
+        scan = None
+        if self.config.lidar.use_depth and frame.points_c is not None:
+            scan = np.asarray(frame.points_c)[:, :3]
 
         start = time.perf_counter()
-        out = system.track(i, float(frame.timestamp), left, right, labels)
+        out = system.track(i, float(frame.timestamp), left, right, labels, scan)
         track_ms = (time.perf_counter() - start) * 1e3
 
         T_w_c = np.asarray(out["T_w_c"], dtype=np.float64).reshape(4, 4)
@@ -161,6 +193,7 @@ class Slam:
             num_inliers=int(out.get("num_inliers", 0)),
             num_map_points=int(out.get("num_map_points", 0)),
             num_keyframes=int(out.get("num_keyframes", 0)),
+            num_lidar_depth=int(out.get("num_lidar_depth", 0)),
             timings_ms=timings,
         )
 

@@ -49,9 +49,10 @@ class FakeSystem:
         self.nan_when_lost = False
         FakeSystem.instances.append(self)
 
-    def track(self, index, timestamp, image_left, image_right, labels):
+    def track(self, index, timestamp, image_left, image_right, labels, points_c=None):
         self.calls.append(dict(index=index, timestamp=timestamp, shape=image_left.shape,
-                               labels=None if labels is None else labels.copy()))
+                               labels=None if labels is None else labels.copy(),
+                               points_c=None if points_c is None else points_c.shape))
         blank = image_left.min() == image_left.max() or image_right.min() == image_right.max()
         if blank:
             status = "lost"
