@@ -18,8 +18,9 @@
 namespace twistslam::tracking {
 
 struct LidarOptions {
-  // Use a frame's scan, when one is given, for keypoint depth. On real KITTI 0001 it brings
-  // the path length within 0.x % of the oxts one (docs/camera_scale.md).
+  // Use a frame's scan, when one is given, for keypoint depth. On real KITTI 0001 (offset
+  // applied in both) ATE 0.041 -> 0.037 m, RPE_R 0.0261 -> 0.0258 deg/frame
+  // (docs/camera_scale.md).
   bool use_depth = true;
   lidar::LidarDepthOptions depth;
 };
