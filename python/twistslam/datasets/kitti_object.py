@@ -152,7 +152,9 @@ class KittiObject:
         if velo is not None:
             points_velo = read_velodyne(velo)
             T = calib.T_c_velo
-            xyz = points_velo[:, :3].astype(np.float64) @ T[:3, :3].T + T[:3, 3]
+            # einsum, not `@`: threaded BLAS takes ~130 ms for this (N, 3) x (3, 3) product on
+            # a busy 2-core machine, einsum ~2 ms
+            xyz = np.einsum("ij,kj->ik", points_velo[:, :3].astype(np.float64), T[:3, :3]) + T[:3, 3]
             points_c = np.hstack([xyz, points_velo[:, 3:4]]).astype(np.float32)
         image_path = self._file("image_2", i) if image else None
         return Frame(
