@@ -16,10 +16,10 @@ CPP_SOURCES := $(shell find cpp cmake -type f) $(shell find python -name "*.py")
 CPP_TEST_BUILD := build/cpp-tests
 REFERENCE_EVALUATORS := trackeval==1.3.0 eval-ab-3d-mot==2.3.0 pure-ab-3d-mot==2.2.0 association-quality-clavia==0.3.2 munkres==3.0.0
 
-.PHONY: setup apt build test test-cpp test-python demo clean help
+.PHONY: setup apt build test test-cpp test-sanitizers test-python demo clean help
 help:
 	@echo "make setup   - apt packages, .venv, torch==$(TORCH_VERSION) (CPU), editable install"
-	@echo "make test    - set up if needed, then C++ (ctest) and Python (pytest) tests"
+	@echo "make test    - set up if needed, then C++ (ctest; also under ASan/UBSan) and Python (pytest) tests"
 	@echo "make demo    - simulate (once), run SLAM, evaluate: demo_out/"
 
 setup: apt .stamp-venv .stamp-build
@@ -54,7 +54,7 @@ BUILD_LOCK := flock build/.build.lock
 
 build: apt .stamp-venv .stamp-build
 
-test: build test-cpp test-python
+test: build test-cpp test-sanitizers test-python
 
 test-cpp: apt .stamp-venv
 	$(VENV)/bin/cmake -S . -B $(CPP_TEST_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release \
@@ -62,6 +62,22 @@ test-cpp: apt .stamp-venv
 	@mkdir -p build
 	$(BUILD_LOCK) $(VENV)/bin/cmake --build $(CPP_TEST_BUILD)
 	cd $(CPP_TEST_BUILD) && $(abspath $(VENV)/bin/ctest) --output-on-failure
+
+# The C++ tests once more as a Debug build (assertions on) under AddressSanitizer and
+# UndefinedBehaviorSanitizer: any out-of-bounds access, leak, overflowing float-to-int
+# conversion or Eigen assertion fails its test (-O1: the Eigen-heavy tests stay quick). Its own
+# build folder and lock leave the Release test build untouched.
+SANITIZE_BUILD := build/cpp-tests-sanitize
+SANITIZE_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
+test-sanitizers: apt .stamp-venv
+	$(VENV)/bin/cmake -S . -B $(SANITIZE_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Debug \
+	  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DCMAKE_C_FLAGS_DEBUG="-O1 -g" \
+	  -DCMAKE_CXX_FLAGS="$(SANITIZE_FLAGS)" -DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_FLAGS)" \
+	  -DTWISTSLAM_BUILD_TESTS=ON -DTWISTSLAM_BUILD_PYTHON=OFF -DCMAKE_MAKE_PROGRAM=$(abspath $(VENV)/bin/ninja) > /dev/null
+	@mkdir -p build
+	flock build/.sanitize.lock $(VENV)/bin/cmake --build $(SANITIZE_BUILD)
+	cd $(SANITIZE_BUILD) && UBSAN_OPTIONS=print_stacktrace=1 $(abspath $(VENV)/bin/ctest) --output-on-failure \
+	  --parallel $(CMAKE_BUILD_PARALLEL_LEVEL)
 
 test-python: build
 	$(PY) -m pytest tests/python -q

@@ -6,8 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "features/orb.hpp"
+#include "features/orb_quadtree.hpp"
 #include "synthetic_scene.hpp"
 
 using namespace twistslam::features;
@@ -221,4 +224,46 @@ TEST(Features, DescriptorDistanceIsABitCount) {
   cv::Mat zeros = cv::Mat::zeros(1, 32, CV_8U), ones(1, 32, CV_8U, cv::Scalar(255));
   EXPECT_EQ(descriptor_distance(zeros, ones), 256);
   EXPECT_THROW(descriptor_distance(zeros, cv::Mat::zeros(1, 16, CV_8U)), std::invalid_argument);
+}
+
+TEST(OrbExtractor, InvalidOptionsNameTheOptionAndItsRange) {
+  auto message = [](const OrbOptions& o) -> std::string {
+    try {
+      OrbExtractor{o};
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  OrbOptions o;
+  o.num_levels = 0;
+  EXPECT_EQ(message(o), "OrbOptions: num_levels = 0 is out of range [1, 32]");
+  o = {};
+  o.num_features = 200000;
+  EXPECT_EQ(message(o), "OrbOptions: num_features = 200000 is out of range [0, 100000]");
+  o = {};
+  o.cell_size = 4;
+  EXPECT_EQ(message(o), "OrbOptions: cell_size = 4 is out of range [8, 4096]");
+  o = {};
+  o.min_fast_threshold = 30;
+  EXPECT_EQ(message(o), "OrbOptions: min_fast_threshold (30) must not exceed fast_threshold (20)");
+  EXPECT_EQ(message(OrbOptions{}), "");
+}
+
+TEST(OrbQuadtree, KeepsTheStrongestCornerOfEachRegion) {
+  // 4 tight clusters of corners in the four quadrants of a square; asked for 4 keypoints the
+  // quadtree keeps one per cluster, the strongest of each.
+  std::vector<cv::KeyPoint> cand;
+  const cv::Point2f centres[] = {{10, 10}, {90, 10}, {10, 90}, {90, 90}};
+  for (int c = 0; c < 4; ++c)
+    for (int k = 0; k < 5; ++k)
+      cand.emplace_back(centres[c] + cv::Point2f(static_cast<float>(k), 0.5f * k), 7.0f, -1.0f,
+                        static_cast<float>(10 * c + k));  // response: strongest is k = 4
+  const auto keep = detail::distribute_keypoints(cand, cv::Rect2f(0, 0, 100, 100), 4);
+  EXPECT_EQ(keep, (std::vector<int>{4, 9, 14, 19}));
+  EXPECT_EQ(detail::distribute_keypoints(cand, cv::Rect2f(0, 0, 100, 100), 0).size(), 0u);
+  EXPECT_EQ(detail::distribute_keypoints(cand, cv::Rect2f(0, 0, 100, 100), 100).size(), cand.size());
+  const auto two = detail::distribute_keypoints(cand, cv::Rect2f(0, 0, 100, 100), 2);
+  EXPECT_EQ(two.size(), 2u);  // the overshoot of the last split is cut to the strongest
+  EXPECT_EQ(two, (std::vector<int>{14, 19}));
 }

@@ -111,3 +111,44 @@ TEST(Se3, InverseAndRigidCheck) {
   bad(3, 0) = 1;
   EXPECT_FALSE(is_rigid_transform(bad));
 }
+
+TEST(RigidTransform, ProblemsAreNamed) {
+  const Mat4 T = se3_exp((Vec6() << 1, -2, 3, 0.3, -0.2, 0.1).finished());
+  EXPECT_EQ(rigid_transform_problem(T, 1e-9), "");
+  EXPECT_TRUE(is_rigid_transform(T));
+  Mat4 scaled = T;
+  scaled.topLeftCorner<3, 3>() *= 3.0;
+  EXPECT_EQ(rigid_transform_problem(scaled, 1e-4), "R^T R differs from I by 8");
+  EXPECT_FALSE(is_rigid_transform(scaled));
+  Mat4 reflected = Mat4::Identity();
+  reflected(2, 2) = -1;
+  EXPECT_EQ(rigid_transform_problem(reflected, 1e-4), "det R = -1 (a reflection)");
+  Mat4 projective = T;
+  projective(3, 0) = 0.5;
+  EXPECT_EQ(rigid_transform_problem(projective, 1e-4), "last row is not [0, 0, 0, 1]");
+  Mat4 nan = T;
+  nan(1, 3) = std::nan("");
+  EXPECT_EQ(rigid_transform_problem(nan, 1e-4), "contains NaN or Inf");
+  EXPECT_EQ(rotation_problem(Mat3::Ones(), 1e-4).rfind("R^T R differs from I by ", 0), 0u);
+  // text-file precision (6 digits) passes a 1e-4 tolerance
+  Mat4 rounded = T;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) rounded(i, j) = std::round(T(i, j) * 1e6) / 1e6;
+  EXPECT_EQ(rigid_transform_problem(rounded, 1e-4), "");
+}
+
+TEST(ConstantVelocity, RepeatsTheLastMotionInEitherConvention) {
+  const Mat4 T_a = se3_exp((Vec6() << 0.5, 0.1, -2, 0.1, 0.4, -0.2).finished());
+  const Mat4 motion = se3_exp((Vec6() << 0, 0, 0.9, 0, 0.03, 0).finished());
+  const Mat4 T_b = motion * T_a;
+  const Mat4 predicted = predict_constant_velocity(T_a, T_b);
+  EXPECT_LT((predicted - motion * T_b).cwiseAbs().maxCoeff(), 1e-12);
+  const Mat4 inverse = predict_constant_velocity(se3_inverse(T_a), se3_inverse(T_b));
+  EXPECT_LT((inverse - se3_inverse(predicted)).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(So3, HatIsTheCrossProduct) {
+  const Vec3 a(0.3, -1.2, 2.0), b(-0.7, 0.4, 1.1);
+  EXPECT_LT((hat(a) * b - a.cross(b)).norm(), 1e-15);
+  EXPECT_LT((vee(hat(a)) - a).norm(), 1e-15);
+}
