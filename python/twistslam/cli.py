@@ -26,7 +26,14 @@ def _run_eval(args: argparse.Namespace) -> int:
     # imported here, not at the top: keeps `twistslam --help` fast (no scipy, matplotlib)
     from .eval.report import load_paper_tables, render_markdown, render_text
     from .eval.sequence import evaluate_sequence
+    from .input_checks import check_output_dir, check_output_file
 
+    # outputs checked first: an unwritable --json must not cost a whole evaluation
+    for option in ("json", "markdown"):
+        if getattr(args, option):
+            check_output_file(getattr(args, option), f"--{option}")
+    if args.plots:
+        check_output_dir(args.plots, "--plots")
     metrics = evaluate_sequence(
         args.root, args.results, args.seq,
         iou_threshold=args.iou, difficulty=args.difficulty, cls=args.cls,
@@ -82,12 +89,36 @@ def _add_eval(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=_run_eval)
 
 
-def _run_run(args: argparse.Namespace) -> int:
+def _check_out(out: str, overwrite: bool) -> None:
+    """``--out`` is writable, and holds no earlier results unless ``--overwrite``: checked
+    before tracking, so a run never ends in an error that loses its results."""
+    from .input_checks import check_output_dir
+    from .result import FILES
+
+    names = (*FILES.values(), "tracking")  # the camera's files, the objects' tracking/
+    existing = [name for name in names if (Path(out) / name).exists()]
+    if existing and not overwrite:
+        raise ValueError(f"--out {out} already holds results ({', '.join(existing)}); pass "
+                         "--overwrite to replace them, or choose another folder")
+    check_output_dir(out, "--out")
+
+
+def _load_config(path: str | None):
     from .config import Config
+
+    if path is None:
+        return Config()
+    if Path(path).is_dir():
+        raise ValueError(f"--config {path}: is a folder, expected a YAML file")
+    return Config.from_yaml(path)
+
+
+def _run_run(args: argparse.Namespace) -> int:
     from .datasets import MissingDataWarning, open_sequence
 
-    config = Config.from_yaml(args.config) if args.config else Config()
+    config = _load_config(args.config)
     config.override(args.set)
+    _check_out(args.out, args.overwrite)
     with warnings.catch_warnings():
         if args.no_images:  # images, scans are not read: do not warn that they are missing
             warnings.simplefilter("ignore", MissingDataWarning)
@@ -138,6 +169,8 @@ def _add_run(sub: argparse._SubParsersAction) -> None:
                    "or a path into one sequence when --seq is not given")
     p.add_argument("--seq", help="sequence number, e.g. 0000")
     p.add_argument("--out", required=True, help="results directory")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace the results an earlier run wrote into --out")
     p.add_argument("--split", default="training", help="dataset split folder (default: training)")
     p.add_argument("--config", metavar="FILE", help="YAML file of settings (partial is fine)")
     p.add_argument("--set", metavar="SECTION.KEY=VALUE", action="extend", nargs="+", default=[],
@@ -186,7 +219,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     try:
         return args.handler(args)
-    except (FileNotFoundError, FileExistsError, ValueError) as exc:
+    except (OSError, ValueError) as exc:  # missing / unreadable / unwritable files, bad values
         print(f"twistslam {args.command}: error: {exc}", file=sys.stderr)
         return 2
     finally:

@@ -6,6 +6,7 @@ jump straight to the offending line; these helpers keep that format in one place
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -13,6 +14,12 @@ from pathlib import Path
 import numpy as np
 
 PathLike = str | os.PathLike
+
+INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
+#: largest frame number a reader accepts. KITTI's longest drive has about 5,200 frames
+#: (raw 2011_09_30_drive_0028); 1e5 leaves 20x room while an array indexed by frame number
+#: (poses, 128 bytes a frame) stays at 13 MB instead of an allocation a typo could blow up.
+MAX_FRAME = 100_000
 
 
 def parse_error(path: PathLike, line_no: int | None, message: str) -> ValueError:
@@ -37,23 +44,37 @@ def iter_lines(path: PathLike, sep: str | None = None) -> Iterator[tuple[int, li
                 yield line_no, [t.strip() for t in text.split(sep)]
 
 
-def to_floats(tokens: list[str], path: PathLike, line_no: int, what: str = "value") -> np.ndarray:
-    """Parse tokens as float64, naming file, line and the bad token on failure."""
+def to_floats(tokens: list[str], path: PathLike, line_no: int, what: str = "value",
+              finite: bool = True) -> np.ndarray:
+    """Parse tokens as float64, naming file, line and the bad token on failure.
+
+    ``finite`` (default): ``nan``, ``inf`` and numbers beyond float64 (``1e400``) are errors
+    too -- Python parses them without complaint, and one of them in a box or a matrix only
+    shows up much later as "SVD did not converge" or as every LiDAR point turned NaN.
+    """
     try:
-        return np.array([float(t) for t in tokens], dtype=np.float64)
+        values = np.array([float(t) for t in tokens], dtype=np.float64)
     except ValueError:
         bad = next(t for t in tokens if not _is_float(t))
         raise parse_error(path, line_no, f"{what}: cannot parse {bad!r} as a number") from None
+    if finite and not np.isfinite(values).all():
+        bad = tokens[int(np.flatnonzero(~np.isfinite(values))[0])]
+        raise parse_error(path, line_no, f"{what}: {bad!r} is not finite (NaN or Inf)")
+    return values
 
 
-def to_int(token: str, path: PathLike, line_no: int, what: str) -> int:
-    """Parse an integer column (also accepts ``"3.0"``, as some writers emit floats)."""
+def to_int(token: str, path: PathLike, line_no: int, what: str,
+           lo: int = INT32_MIN, hi: int = INT32_MAX) -> int:
+    """Parse an integer column (also accepts ``"3.0"``, as some writers emit floats) that must
+    lie in ``[lo, hi]`` (default: the int32 range the C++ core stores ids in)."""
     try:
         value = float(token)
     except ValueError:
         raise parse_error(path, line_no, f"{what}: cannot parse {token!r} as an integer") from None
-    if value != int(value):
+    if not math.isfinite(value) or value != int(value):
         raise parse_error(path, line_no, f"{what}: expected an integer, got {token!r}")
+    if not lo <= value <= hi:
+        raise parse_error(path, line_no, f"{what}: {token} is outside [{lo}, {hi}]")
     return int(value)
 
 

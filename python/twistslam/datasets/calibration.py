@@ -29,6 +29,29 @@ _KEYS: dict[str, tuple[str, tuple[int, int]]] = {
     "Tr_imu_to_velo": ("Tr_imu_velo", (3, 4)),
 }
 _FIELDS = ("P0", "P1", "P2", "P3", "R_rect", "Tr_velo_cam", "Tr_imu_velo")
+#: |R R^T - I| a rotation may show: KITTI's 7-digit matrices are orthonormal to 1e-7; 1e-3
+#: still passes a hand-rounded file and catches a mistyped digit or a matrix that is no rotation
+ROTATION_TOLERANCE = 1e-3
+
+
+def value_problem(name: str, M: np.ndarray) -> str | None:
+    """Why matrix ``name`` cannot be a KITTI calibration entry, or None when it can.
+
+    Non-finite values anywhere (an inf in ``Tr_velo_cam`` turns every LiDAR point and every
+    oxts pose NaN); a zero or negative focal length in the colour cameras P2 / P3 the system
+    projects with (singular intrinsics); rotation parts that are not rotations.
+    """
+    if not np.isfinite(M).all():
+        return "holds NaN or inf values"
+    if name in ("P2", "P3") and not (M[0, 0] > 0 and M[1, 1] > 0):
+        return f"focal lengths fx = {M[0, 0]:g}, fy = {M[1, 1]:g} must be positive"
+    if name in ("R_rect", "Tr_velo_cam", "Tr_imu_velo"):
+        R = M[:, :3]
+        error = np.abs(R @ R.T - np.eye(3)).max()
+        if error > ROTATION_TOLERANCE or np.linalg.det(R) < 0:
+            return (f"rotation part is not a rotation (|R R^T - I| = {error:.2g}, "
+                    f"det {np.linalg.det(R):.3g})")
+    return None
 
 
 def _homogeneous(M: np.ndarray) -> np.ndarray:
@@ -63,6 +86,10 @@ class Calibration:
             value = np.asarray(getattr(self, name), dtype=np.float64)
             if value.shape != shape:
                 raise ValueError(f"Calibration.{name}: expected shape {shape}, got {value.shape}")
+            problem = value_problem(name, value)
+            if problem is not None:
+                where = f"{self.source}: " if self.source else "Calibration."
+                raise ValueError(f"{where}{name}: {problem}")
             setattr(self, name, value)
 
     def __eq__(self, other: object) -> bool:
@@ -113,7 +140,8 @@ def read_calibration(path: PathLike) -> Calibration:
     FileNotFoundError
         If the file does not exist.
     ValueError
-        ``"<file>:<line>: <key>: ..."`` for a bad value count, an unparsable number or a
+        ``"<file>:<line>: <key>: ..."`` for a bad value count, an unparsable or non-finite
+        number, a non-positive focal length of P2 / P3, a rotation that is none, or a
         repeated key; ``"<file>: missing key <key>"`` for a matrix that never appears.
         Unknown keys are ignored (some KITTI variants add their own).
     """
@@ -133,6 +161,9 @@ def read_calibration(path: PathLike) -> Calibration:
         if len(rest) != expected:
             raise parse_error(path, line_no, f"{key}: expected {expected} values, got {len(rest)}")
         values[name] = to_floats(rest, path, line_no, key).reshape(shape)
+        problem = value_problem(name, values[name])
+        if problem is not None:
+            raise parse_error(path, line_no, f"{key}: {problem}")
     for name in _FIELDS:
         if name not in values:
             raise parse_error(path, None, f"missing key {name}")

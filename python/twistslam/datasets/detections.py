@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._parsing import PathLike, iter_lines, parse_error, to_floats, to_int
+from ._parsing import INT32_MIN, MAX_FRAME, PathLike, iter_lines, parse_error, to_floats, to_int
 from .objects import ObjectTable
 
 #: integer class codes of the AB3DMOT detection files
@@ -34,7 +34,8 @@ def read_detections(path: PathLike) -> ObjectTable:
     for line_no, tokens in iter_lines(path, sep=","):
         if len(tokens) != N_COLUMNS:
             raise parse_error(path, line_no, f"expected {N_COLUMNS} columns, got {len(tokens)}")
-        frame.append(to_int(tokens[0], path, line_no, "frame"))
+        # below 0: refused by the tracker's loader, which names the sequence's frame range
+        frame.append(to_int(tokens[0], path, line_no, "frame", INT32_MIN, MAX_FRAME))
         code = to_int(tokens[1], path, line_no, "type")
         if code not in DETECTION_CLASSES:
             known = ", ".join(f"{k}={v}" for k, v in DETECTION_CLASSES.items())

@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._parsing import PathLike, ensure_parent, iter_lines, parse_error, to_floats, to_int
+from ._parsing import (
+    INT32_MAX, MAX_FRAME, PathLike, ensure_parent, iter_lines, parse_error, to_floats, to_int,
+)
 from .objects import ObjectTable
 
 
@@ -39,14 +41,15 @@ def read_labels(path: PathLike) -> ObjectTable:
     Raises
     ------
     ValueError
-        ``"<file>:<line>: expected 17 or 18 columns, got n"``, or a bad number / integer.
+        ``"<file>:<line>: expected 17 or 18 columns, got n"``, a bad number / integer, a
+        NaN / inf value, or a frame outside ``[0, MAX_FRAME]``.
     """
     frame, track, cls, trunc, occ, numbers = [], [], [], [], [], []
     for line_no, tokens in iter_lines(path):
         if len(tokens) not in (17, 18):
             raise parse_error(path, line_no, f"expected 17 or 18 columns, got {len(tokens)}")
-        frame.append(to_int(tokens[0], path, line_no, "frame"))
-        track.append(to_int(tokens[1], path, line_no, "track_id"))
+        frame.append(to_int(tokens[0], path, line_no, "frame", 0, MAX_FRAME))
+        track.append(to_int(tokens[1], path, line_no, "track_id", -1, INT32_MAX))
         cls.append(tokens[2])
         # tracking labels use an integer truncation level, object labels a fraction: keep float
         trunc.append(to_floats(tokens[3:4], path, line_no, "truncated")[0])

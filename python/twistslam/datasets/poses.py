@@ -13,13 +13,19 @@ def read_poses(path: PathLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        ``"<file>:<line>: expected 12 values, got n"`` or an unparsable number.
+        ``"<file>:<line>: expected 12 values, got n"``, an unparsable number, or a row
+        that is neither 12 finite numbers nor 12 NaN (the rows ``Result.save`` writes for
+        frames without a pose, which the evaluator skips).
     """
     rows = []
     for line_no, tokens in iter_lines(path):
         if len(tokens) != 12:
             raise parse_error(path, line_no, f"expected 12 values, got {len(tokens)}")
-        rows.append(to_floats(tokens, path, line_no, "pose"))
+        row = to_floats(tokens, path, line_no, "pose", finite=False)
+        if not np.isfinite(row).all() and not np.isnan(row).all():
+            raise parse_error(path, line_no, "pose: expected 12 finite numbers, or 12 NaN for "
+                              "a frame without a pose")
+        rows.append(row)
     poses = np.tile(np.eye(4), (len(rows), 1, 1))
     if rows:
         poses[:, :3, :] = np.stack(rows).reshape(-1, 3, 4)

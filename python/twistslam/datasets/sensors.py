@@ -14,12 +14,46 @@ class MissingDataWarning(UserWarning):
     """A modality or a file of a sequence is missing, or data had to be dropped."""
 
 
+#: pixels an image file may declare: 85x KITTI's 0.47 Mpx (its RGB array is 120 MB); a
+#: decompression bomb (a small PNG declaring gigapixels) is refused before it is decoded
+MAX_IMAGE_PIXELS = 40_000_000
+#: Pillow modes of 16-bit grey images (``I``: Pillow versions that widen them to int32)
+_SIXTEEN_BIT_MODES = ("I;16", "I;16L", "I;16B", "I;16N", "I")
+
+
 def read_image(path: PathLike) -> np.ndarray:
-    """Read an image as ``(H, W, 3)`` uint8 RGB (grey images are replicated to 3 channels)."""
+    """Read an image as ``(H, W, 3)`` uint8 RGB (grey images are replicated to 3 channels).
+
+    16-bit images are scaled to 8 bits (``round(v / 257)``; Pillow alone clips grey ones to
+    255, all white). Raises ``ValueError`` naming the file for an image of more than
+    :data:`MAX_IMAGE_PIXELS` pixels or of a kind that is not an 8- or 16-bit picture.
+    """
     from PIL import Image  # Pillow only when images are actually read
 
-    with Image.open(path) as image:
-        return np.array(image.convert("RGB"), dtype=np.uint8)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            with Image.open(path) as image:
+                width, height = image.size
+                if width * height > MAX_IMAGE_PIXELS:
+                    raise ValueError(f"{path}: {width}x{height} pixels, more than the "
+                                     f"{MAX_IMAGE_PIXELS} an image may have")
+                return _rgb8(image, path)
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
+        raise ValueError(f"{path}: refused as a decompression bomb ({exc})") from None
+
+
+def _rgb8(image, path: PathLike) -> np.ndarray:
+    if image.mode in _SIXTEEN_BIT_MODES:
+        values = np.asarray(image).astype(np.int64)
+        if values.size and (values.min() < 0 or values.max() > 65535):
+            raise ValueError(f"{path}: {image.mode} image with values outside 0..65535; "
+                             "expected an 8- or 16-bit image")
+        grey = ((values + 128) // 257).astype(np.uint8)
+        return np.repeat(grey[..., None], 3, axis=2)
+    if image.mode == "F":
+        raise ValueError(f"{path}: floating-point image; expected an 8- or 16-bit image")
+    return np.array(image.convert("RGB"), dtype=np.uint8)
 
 
 def read_velodyne(path: PathLike) -> np.ndarray:

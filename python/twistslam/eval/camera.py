@@ -25,6 +25,7 @@ class CameraMetrics:
     n_evaluated : frames with a finite estimate (used by ATE).
     n_skipped : frames whose estimate is NaN or missing (file shorter than the sequence).
     n_pairs : consecutive frame pairs used by RPE.
+    n_beyond_gt : frames with an estimate past the end of the ground truth (not evaluated).
     """
 
     rpe_t_mean: float
@@ -37,6 +38,7 @@ class CameraMetrics:
     n_evaluated: int
     n_skipped: int
     n_pairs: int
+    n_beyond_gt: int = 0
 
     def to_dict(self) -> dict[str, float]:
         """The ``camera`` section of ``metrics.json``."""
@@ -64,6 +66,7 @@ def evaluate_camera(gt_poses: np.ndarray, est_poses: np.ndarray) -> CameraMetric
     m = min(len(gt), len(est_poses))
     est[:m] = np.asarray(est_poses, dtype=np.float64)[:m]
     ok = valid_pose_mask(est) & valid_pose_mask(gt)
+    beyond = np.asarray(est_poses, dtype=np.float64)[len(gt):]  # no ground truth to compare
 
     ate = ate_errors(gt[ok], est[ok], aligned=False)
     ate_al = ate_errors(gt[ok], est[ok], aligned=True)
@@ -78,4 +81,6 @@ def evaluate_camera(gt_poses: np.ndarray, est_poses: np.ndarray) -> CameraMetric
         ate_rmse=rmse(ate_al), ate_rmse_unaligned=rmse(ate),
         n_frames=len(gt), n_evaluated=int(ok.sum()), n_skipped=int(len(gt) - ok.sum()),
         n_pairs=len(starts),
+        n_beyond_gt=int(np.isfinite(beyond.reshape(len(beyond), -1)).all(axis=1).sum())
+        if len(beyond) else 0,
     )

@@ -131,6 +131,10 @@ def _camera_table(runs: list[SequenceMetrics], paper: dict | None) -> Table:
         if run.camera.n_skipped:
             cam.notes.append(f"{run.seq}: {run.camera.n_skipped} of {run.camera.n_frames} "
                              "frames have no estimate (skipped)")
+        if run.camera.n_beyond_gt:
+            cam.notes.append(f"{run.seq}: evaluated on frames 0-{run.camera.n_frames - 1}, the "
+                             f"ground truth's; {run.camera.n_beyond_gt} estimated frames after "
+                             "them are not evaluated")
     cam.notes.append("ATE after SE(3) Umeyama alignment; RPE over consecutive frames")
     return cam
 

@@ -173,6 +173,11 @@ def evaluate_sequence(
                       + " and ".join(consequences), stacklevel=2)
     elif results.camera_poses is not None:
         out.camera = evaluate_camera(gt_T_w_c, results.camera_poses)
+        if out.camera.n_beyond_gt:
+            n = len(gt_T_w_c)
+            warnings.warn(f"sequence {name}: {results.camera_path} has poses for "
+                          f"{out.camera.n_beyond_gt} frames past the ground truth's {n}: the "
+                          f"camera is evaluated on frames 0-{n - 1} only", stacklevel=2)
         out.trajectories.camera_gt = gt_T_w_c
         out.trajectories.camera_est = results.camera_poses
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 
+from .config import MAX_IMAGE_SIDE
 from .scenario import SCENARIOS
 
 
@@ -15,6 +16,13 @@ def _positive(text: str) -> int:
     value = int(text)
     if value <= 0:
         raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
+    return value
+
+
+def _image_side(text: str) -> int:
+    value = _positive(text)
+    if value > MAX_IMAGE_SIDE:
+        raise argparse.ArgumentTypeError(f"must be at most {MAX_IMAGE_SIDE} px, got {text}")
     return value
 
 
@@ -46,8 +54,10 @@ def add_sim_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentP
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed -> identical files)")
     p.add_argument("--seq", default="0000", help="sequence number, e.g. 0000")
     p.add_argument("--calib", default=None, help="KITTI calibration file (default: tracking 0000)")
-    p.add_argument("--width", type=_positive, default=None, help="image width (default 1242)")
-    p.add_argument("--height", type=_positive, default=None, help="image height (default 375)")
+    p.add_argument("--width", type=_image_side, default=None,
+                   help=f"image width, px (default 1242, at most {MAX_IMAGE_SIDE})")
+    p.add_argument("--height", type=_image_side, default=None,
+                   help=f"image height, px (default 375, at most {MAX_IMAGE_SIDE})")
     p.add_argument("--overwrite", action="store_true", help="replace this sequence in a non-empty OUT")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--set", dest="settings", type=_setting, action="append", default=[], metavar="SECTION.FIELD=VALUE",
@@ -66,8 +76,10 @@ def run_sim(args: argparse.Namespace) -> int:
     """Handler of ``twistslam sim``; returns the exit code. User errors (unknown scenario or
     setting, non-empty OUT without --overwrite, bad calibration) raise ValueError or
     FileNotFoundError for the main CLI to print as one line."""
+    from ..input_checks import check_output_dir
     from .generate import generate
 
+    check_output_dir(args.out, "OUT")  # a file or a read-only folder: said before rendering
     overrides = {key: _value(value) for key, value in args.settings}
     try:
         out = generate(args.out, scenario=args.scenario, frames=args.frames, seed=args.seed, seq=args.seq,
@@ -88,7 +100,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(["sim", *(sys.argv[1:] if argv is None else argv)])
     try:
         return args.handler(args)
-    except (FileNotFoundError, ValueError) as exc:
+    except (OSError, ValueError) as exc:
         print(f"twistslam sim: error: {exc}", file=sys.stderr)
         return 2
 

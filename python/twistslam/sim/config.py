@@ -79,6 +79,33 @@ class TrafficConfig:
     idm_decel: float = 2.5  # m/s^2; IDM comfortable deceleration
 
 
+#: px, largest image side: 6.6x KITTI's 1242 px width (a typo such as --width 100000 asked
+#: for a 149 GiB allocation)
+MAX_IMAGE_SIDE = 8192
+#: pixels of an image: measured peak memory 0.67 GB at KITTI's 0.47 Mpx and 1.4 GB at 1.9 Mpx
+#: (about 0.5 GB per Mpx), so 4 Mpx (8.6x KITTI) stays near 2.5 GB
+MAX_RENDER_PIXELS = 4_000_000
+#: rays per pixel side: the render time grows with its square (4 = 16 rays, 16x the time)
+MAX_SUPERSAMPLE = 4
+
+
+def check_camera(cam: "CameraConfig") -> None:
+    """Refuse an image size or supersampling the renderer cannot afford, naming the setting
+    (``--width`` / ``--height`` on the command line)."""
+    for name in ("width", "height"):
+        value = getattr(cam, name)
+        if not 1 <= value <= MAX_IMAGE_SIDE:
+            raise ValueError(f"camera.{name} (--{name}) = {value}: must be in [1, "
+                             f"{MAX_IMAGE_SIDE}] px")
+    if cam.width * cam.height > MAX_RENDER_PIXELS:
+        raise ValueError(f"camera.width x camera.height (--width x --height) = {cam.width} x "
+                         f"{cam.height} = {cam.width * cam.height} pixels: at most "
+                         f"{MAX_RENDER_PIXELS} (about 0.5 GB of memory per million pixels)")
+    if not 1 <= cam.supersample <= MAX_SUPERSAMPLE:
+        raise ValueError(f"camera.supersample = {cam.supersample}: must be in [1, "
+                         f"{MAX_SUPERSAMPLE}] (render time grows with its square)")
+
+
 @dataclass
 class CameraConfig:
     """Stereo pair: calibration, image size, optics and sensor."""

@@ -13,7 +13,7 @@ from twistslam.datasets import ObjectTable
 
 from . import extras
 from .camera_render import Camera, render
-from .config import SimConfig
+from .config import SimConfig, check_camera
 from .labels import frame_labels
 from .lidar import Lidar
 from .scenario import scenario_config
@@ -74,6 +74,7 @@ def _rng(cfg: SimConfig, stream: str, n: int) -> np.random.Generator:
 
 def run(cfg: SimConfig, out: str | Path, overwrite: bool = False, progress: bool = True) -> Path:
     """Generate the sequence described by ``cfg`` (see :func:`generate`)."""
+    check_camera(cfg.camera)  # before anything is written or allocated
     writer = SequenceWriter(out, cfg.seq, overwrite, cfg.output.png_compression)
     world = World(cfg)
     left = Camera(world.calib.P2, world.width, world.height)

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from twistslam.datasets.sensors import MAX_IMAGE_PIXELS
+
 
 def _chunk(kind: bytes, data: bytes) -> bytes:
     return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
@@ -90,12 +92,21 @@ def read_png16(path: str | Path) -> np.ndarray:
         elif kind == b"IDAT":
             idat.append(body)
         pos += 12 + length
+    if header is None:
+        raise ValueError(f"{path}: PNG without an IHDR chunk")
     w, h, depth, colour_type, _, _, interlace = header
     if depth != 16 or colour_type not in (0, 2) or interlace:
         raise ValueError(f"{path}: expected a non-interlaced 16-bit grey or RGB PNG")
+    if w * h > MAX_IMAGE_PIXELS:
+        raise ValueError(f"{path}: {w}x{h} pixels, more than the {MAX_IMAGE_PIXELS} an image "
+                         "may have")
     channels = 1 if colour_type == 0 else 3
     bpp, stride = 2 * channels, w * 2 * channels
-    raw = np.frombuffer(zlib.decompress(b"".join(idat)), np.uint8).reshape(h, stride + 1)
+    # never more than the header's size: a decompression bomb stops there
+    data = zlib.decompressobj().decompress(b"".join(idat), h * (stride + 1))
+    if len(data) != h * (stride + 1):
+        raise ValueError(f"{path}: image data ends early ({len(data)} of {h * (stride + 1)} bytes)")
+    raw = np.frombuffer(data, np.uint8).reshape(h, stride + 1)
     out = np.zeros((h, stride), np.uint8)
     prev = np.zeros(stride, np.uint8)
     for y in range(h):
