@@ -196,11 +196,20 @@ py::dict match_stereo(const py::handle& image_left, const py::handle& image_righ
   return out;
 }
 
-py::dict default_options() {
+// The default ORB and stereo options in one field table (the tables' fields point into them).
+struct DefaultOptions {
   f::OrbOptions orb;
   f::StereoOptions stereo;
-  py::dict out = dump_section(field_table(orb));
-  for (const auto& item : dump_section(field_table(stereo))) out[item.first] = item.second;
+  FieldTable fields() {
+    FieldTable table = field_table(orb);
+    table.merge(field_table(stereo));
+    return table;
+  }
+};
+
+py::dict default_options() {
+  DefaultOptions defaults;
+  py::dict out = dump_section(defaults.fields());
   // float fields as the decimal they were written as (1.2, not 1.2000000476837158)
   for (const auto& item : out)
     if (py::isinstance<py::float_>(item.second))
@@ -209,11 +218,8 @@ py::dict default_options() {
 }
 
 py::dict option_ranges() {
-  f::OrbOptions orb;
-  f::StereoOptions stereo;
-  py::dict out = dump_ranges(field_table(orb));
-  for (const auto& item : dump_ranges(field_table(stereo))) out[item.first] = item.second;
-  return out;
+  DefaultOptions defaults;
+  return dump_ranges(defaults.fields());
 }
 
 py::array_t<std::int32_t> hamming_distance(const py::handle& a_obj, const py::handle& b_obj) {
