@@ -344,12 +344,20 @@ def test_config_naming_a_folder_is_one_error(sim_root, tmp_path, capsys):
     assert code == 2 and f"--config {tmp_path}: is a folder" in one_error(err, "run")
 
 
-def test_sim_width_option_is_bounded(tmp_path, capsys):
-    """It used to ask for a 149 GiB allocation."""
+@pytest.mark.parametrize("option, value, message", [
+    ("--width", "100000", "argument --width: must be at most 8192 px"),  # was 149 GiB
+    ("--frames", "100000000", "argument --frames: must be at most 2000"),  # never finished
+])
+def test_sim_size_options_are_bounded(tmp_path, capsys, option, value, message):
     with pytest.raises(SystemExit) as info:
-        cli.main(["sim", str(tmp_path / "out"), "--width", "100000"])
-    assert info.value.code == 2
-    assert "argument --width: must be at most 8192 px" in capsys.readouterr().err
+        cli.main(["sim", str(tmp_path / "out"), option, value])
+    assert info.value.code == 2 and message in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_sim_api_frames_are_bounded(tmp_path):
+    with pytest.raises(ValueError, match=r"frames \(--frames\) = 2001: at most 2000"):
+        generate(tmp_path / "out", frames=2001, progress=False)
     assert not (tmp_path / "out").exists()
 
 

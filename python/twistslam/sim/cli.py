@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 
-from .config import MAX_IMAGE_SIDE
+from .config import MAX_FRAMES, MAX_IMAGE_SIDE
 from .scenario import SCENARIOS
 
 
@@ -23,6 +23,13 @@ def _image_side(text: str) -> int:
     value = _positive(text)
     if value > MAX_IMAGE_SIDE:
         raise argparse.ArgumentTypeError(f"must be at most {MAX_IMAGE_SIDE} px, got {text}")
+    return value
+
+
+def _frames(text: str) -> int:
+    value = _positive(text)
+    if value > MAX_FRAMES:
+        raise argparse.ArgumentTypeError(f"must be at most {MAX_FRAMES}, got {text}")
     return value
 
 
@@ -50,7 +57,8 @@ def add_sim_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentP
     p.add_argument("out", help="output root (must be empty unless --overwrite)")
     p.add_argument("--scenario", type=_scenario, default="urban",
                    help="urban | highway | intersection | static | crowded")
-    p.add_argument("--frames", type=_positive, default=100, help="number of frames (10 Hz)")
+    p.add_argument("--frames", type=_frames, default=100,
+                   help=f"number of frames (10 Hz, at most {MAX_FRAMES})")
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed -> identical files)")
     p.add_argument("--seq", default="0000", help="sequence number, e.g. 0000")
     p.add_argument("--calib", default=None, help="KITTI calibration file (default: tracking 0000)")

@@ -87,6 +87,10 @@ MAX_IMAGE_SIDE = 8192
 MAX_RENDER_PIXELS = 4_000_000
 #: rays per pixel side: the render time grows with its square (4 = 16 rays, 16x the time)
 MAX_SUPERSAMPLE = 4
+#: frames of a sequence: about twice KITTI tracking's longest (1,059 frames). The whole street
+#: is built up front (measured: 40 s for 300 frames; --frames 1e8 never finished), and urban
+#: drives past ~1,000 frames exceed the panoptic encoding's 998 objects anyway
+MAX_FRAMES = 2000
 
 
 def check_camera(cam: "CameraConfig") -> None:

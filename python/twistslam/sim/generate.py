@@ -13,7 +13,7 @@ from twistslam.datasets import ObjectTable
 
 from . import extras
 from .camera_render import Camera, render
-from .config import SimConfig, check_camera
+from .config import MAX_FRAMES, SimConfig, check_camera
 from .labels import frame_labels
 from .lidar import Lidar
 from .scenario import scenario_config
@@ -54,6 +54,8 @@ def generate(out: str | Path, scenario: str = "urban", frames: int = 100, seed: 
     """
     if int(frames) <= 0:
         raise ValueError(f"frames must be positive, got {frames}")
+    if int(frames) > MAX_FRAMES:
+        raise ValueError(f"frames (--frames) = {frames}: at most {MAX_FRAMES}")
     seq = f"{int(seq):04d}" if isinstance(seq, int) or str(seq).isdigit() else str(seq)
     if not re.fullmatch(r"\d{4}", seq):
         raise ValueError(f"seq must be a 4-digit sequence number such as 0000, got {seq!r}")
