@@ -1,18 +1,20 @@
 #pragma once
-// The stereo SLAM system, one call per frame: features and stereo, camera tracking on
-// static points (paper eq. 3), keyframe decision, local mapping with bundle adjustment.
+// The stereo SLAM system, one call per frame. It orchestrates its components: the frame
+// builder (features, stereo, labels, LiDAR depth), camera tracking on static points (paper
+// eq. 3) and local mapping (keyframes, new points, culling, local BA of eq. 9). Object
+// tracking is meant to become a third component beside camera tracking.
 // Tracking loss never throws: the frame is flagged lost, the pose is predicted with the
 // constant-velocity model, and a new map segment starts from the next good stereo frame.
 #include <opencv2/core/mat.hpp>
 #include <string>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
-#include "features/orb.hpp"
 #include "geometry/stereo_camera.hpp"
 #include "map/map.hpp"
-#include "tracking/frame.hpp"
+#include "tracking/camera_tracker.hpp"
+#include "tracking/frame_builder.hpp"
+#include "tracking/local_mapper.hpp"
 #include "tracking/options.hpp"
 
 namespace twistslam::tracking {
@@ -59,45 +61,20 @@ class System {
   void reset();
 
  private:
-  Frame build_frame(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
-                    const cv::Mat& labels, const Points3& points_c, TrackResult* result);
-  Mat4 predicted_pose() const;
-  // camera_tracking.cpp
-  bool track_with_motion_model(Frame& frame, double radius_scale);
-  bool track_local_map(Frame& frame);
-  bool relocalize_in_local_map(Frame& frame);
-  int optimize_frame_pose(Frame& frame, bool drop_outliers);
-  // local_mapping.cpp
-  int count_initial_points(const Frame& frame) const;
-  void start_segment(Frame& frame);
-  bool need_keyframe(const Frame& frame) const;
-  int insert_keyframe(Frame& frame);
-  int create_stereo_points(Frame& frame, int keyframe_id);
-  void cull_recent_points(int keyframe_id);
-  void local_bundle_adjustment(int keyframe_id);
-  void bound_map_size();
+  // The frame's pose relative to the reference keyframe (BA corrections reach it later).
+  void record_trajectory(const Frame& frame, Status status);
 
-  geometry::StereoCamera camera_;
   SlamOptions options_;
-  features::OrbExtractor extractor_;
-  std::vector<double> inv_level_sigma2_;
-  std::unordered_set<int> dynamic_classes_;
+  FrameBuilder frame_builder_;
+  CameraTracker camera_tracker_;
+  LocalMapper local_mapper_;
   map::Map map_;
 
   enum class State { kEmpty, kTracking, kLost } state_ = State::kEmpty;
-  Frame last_frame_;
-  bool has_last_ = false;
-  Mat4 velocity_ = Mat4::Identity();  // T_c_w(i) * T_c_w(i-1)^-1 of the last two tracked frames
-  bool has_velocity_ = false;         // false until two consecutive frames were tracked
+  // The keyframe sharing most points with the last frame (or the newest keyframe): the
+  // trajectory stores poses relative to it, and it is the keyframe decision's reference.
   int reference_keyframe_ = -1;
-  int last_keyframe_frame_ = -1;
-  int segment_ = -1;
-  int segment_first_keyframe_ = -1;
-  std::vector<int> recent_points_;
-  std::vector<int> local_keyframes_;
   std::vector<TrajectoryEntry> trajectory_;
-  double last_ba_ms_ = 0;  // wall time of the local BA of the last inserted keyframe
-  int lidar_depth_keypoints_ = 0;  // keypoints with a LiDAR depth in the frame being built
 };
 
 }  // namespace twistslam::tracking
