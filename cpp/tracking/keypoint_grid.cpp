@@ -24,7 +24,8 @@ void KeypointGrid::build(const std::vector<Vec2>& uv, int width, int height, int
   cols_ = std::max(1, (width + cell_ - 1) / cell_);
   rows_ = std::max(1, (height + cell_ - 1) / cell_);
   cells_.assign(static_cast<size_t>(cols_) * rows_, {});
-  uv_ = &uv;
+  uv_ = uv;
+  built_ = true;
   for (size_t i = 0; i < uv.size(); ++i) {
     if (!uv[i].allFinite()) continue;  // never found by a query
     const int c = cell_index(uv[i].x(), cell_, cols_);
@@ -35,14 +36,14 @@ void KeypointGrid::build(const std::vector<Vec2>& uv, int width, int height, int
 
 void KeypointGrid::query(double u, double v, double radius, std::vector<int>* out) const {
   out->clear();
-  if (!uv_ || !std::isfinite(u) || !std::isfinite(v) || !(radius >= 0)) return;
+  if (!built_ || !std::isfinite(u) || !std::isfinite(v) || !(radius >= 0)) return;
   const int c0 = cell_index(u - radius, cell_, cols_), c1 = cell_index(u + radius, cell_, cols_);
   const int r0 = cell_index(v - radius, cell_, rows_), r1 = cell_index(v + radius, cell_, rows_);
   const double r2 = radius * radius;
   for (int r = r0; r <= r1; ++r)
     for (int c = c0; c <= c1; ++c)
       for (int i : cells_[r * cols_ + c])
-        if (((*uv_)[i] - Vec2(u, v)).squaredNorm() <= r2) out->push_back(i);
+        if ((uv_[i] - Vec2(u, v)).squaredNorm() <= r2) out->push_back(i);
 }
 
 int Frame::num_matched_inliers() const {

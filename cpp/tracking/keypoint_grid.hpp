@@ -18,7 +18,10 @@ class KeypointGrid {
  private:
   int cell_ = 32, cols_ = 0, rows_ = 0;
   std::vector<std::vector<int>> cells_;
-  const std::vector<Vec2>* uv_ = nullptr;
+  // A copy (~50 kB per frame), not a pointer: a Frame that is moved or copied after build()
+  // must not leave its grid reading the keypoints of another object.
+  std::vector<Vec2> uv_;
+  bool built_ = false;
 };
 
 }  // namespace twistslam::tracking

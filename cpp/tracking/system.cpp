@@ -35,7 +35,7 @@ const char* to_string(Status status) {
 }
 
 System::System(const geometry::StereoCamera& camera, const SlamOptions& options)
-    : options_(options),
+    : options_((check_options(options), options)),  // the same ranges as from Python
       frame_builder_(camera, options),
       camera_tracker_(camera, options.tracking, frame_builder_.extractor().scale_factors(),
                       LevelWeights(frame_builder_.extractor().level_sigma2())),
