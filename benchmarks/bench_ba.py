@@ -28,7 +28,7 @@ from scipy.sparse import lil_matrix
 from scipy.spatial.transform import Rotation
 
 from twistslam import geometry as g
-from twistslam._core import optim
+from twistslam import optim
 
 P2 = np.array([[721.5377, 0, 609.5593, 44.85728], [0, 721.5377, 172.854, 0.2163791],
                [0, 0, 1, 0.002745884]])
