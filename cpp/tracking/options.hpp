@@ -40,7 +40,7 @@ struct LocalBAOptions {
   int iterations_second = 4;
   double huber_stereo = 2.796;  // sqrt(7.815)
   double huber_mono = 2.448;    // sqrt(5.991)
-  int num_threads = 2;
+  int num_threads = 1;  // 1: bit-for-bit reproducible runs (config.py has the figures)
 };
 
 struct MapOptions {

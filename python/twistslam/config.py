@@ -139,7 +139,10 @@ class LocalBAConfig:
     huber_stereo: float = param(2.796, "sqrt(7.815): Huber kink at the stereo chi-square gate",
                                 "px")
     huber_mono: float = param(2.448, "sqrt(5.991): Huber kink at the mono chi-square gate", "px")
-    num_threads: int = param(2, "Ceres threads; tracking keeps the other cores")
+    num_threads: int = param(1, "Ceres threads. 1: runs are bit-for-bit reproducible (Ceres "
+                             "sums the threads' parts in scheduling order); 2 makes the simulated "
+                             "urban loop ~30 % faster (46 -> 32 ms/frame median) with results "
+                             "differing by ~1e-14 m between runs")
 
 
 @dataclass
