@@ -17,6 +17,7 @@ import argparse
 import dataclasses
 import hashlib
 import json
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -68,6 +69,19 @@ def sequence_key(scenario: str = SCENARIO, frames: int = FRAMES, seed: int = SEE
             "sim_code": sim_code_version()}
 
 
+def _process_alive(pid: str) -> bool:
+    """Whether the process of a partial folder's suffix still runs (no suffix: no)."""
+    if not pid.isdigit():
+        return False
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
 def cached_sequence(cache: Path, scenario: str = SCENARIO, frames: int = FRAMES,
                     seed: int = SEED, seq: str = SEQ, progress: bool = True) -> Path:
     """Root of the simulated sequence, generated on first use.
@@ -88,13 +102,20 @@ def cached_sequence(cache: Path, scenario: str = SCENARIO, frames: int = FRAMES,
             print(f"demo: using the cached sequence {root}")
             return root
         stale = True
-    partial = root.with_name(root.name + ".partial")
-    shutil.rmtree(partial, ignore_errors=True)
+    # one partial folder per process: two runs that regenerate at once must not share one;
+    # those left by interrupted generations (their process is gone) are removed
+    for old in cache.glob(f"{root.name}.partial*"):
+        if not _process_alive(old.name.rpartition("-")[2]):
+            shutil.rmtree(old, ignore_errors=True)
+    partial = root.with_name(f"{root.name}.partial-{os.getpid()}")
     why = " (the cached one was made by another simulator configuration or code)" if stale else " (once)"
     print(f"demo: generating the {scenario} sequence ({frames} frames, seed {seed}) "
           f"into {root}{why}")
     generate(partial, scenario=scenario, frames=frames, seed=seed, seq=seq, progress=progress)
     (partial / MARKER).write_text(json.dumps(key) + "\n", encoding="utf-8")
+    if marker.is_file() and json.loads(marker.read_text(encoding="utf-8")) == key:
+        shutil.rmtree(partial, ignore_errors=True)  # another process finished first
+        return root
     shutil.rmtree(root, ignore_errors=True)
     partial.rename(root)
     return root

@@ -120,11 +120,10 @@ class PanopticLabels:
         path = self.path(index)
         if not path.is_file():
             return None
-        from PIL import Image
+        from .datasets.sensors import read_bounded_image
 
         try:
-            with Image.open(path) as image:
-                ids = np.array(image)
+            ids = read_bounded_image(path, lambda image, _: np.array(image))
         except OSError as exc:
             raise ValueError(f"frame {index}: cannot read panoptic labels {path}: {exc}") from exc
         if ids.ndim != 2:

@@ -28,6 +28,13 @@ def read_image(path: PathLike) -> np.ndarray:
     255, all white). Raises ``ValueError`` naming the file for an image of more than
     :data:`MAX_IMAGE_PIXELS` pixels or of a kind that is not an 8- or 16-bit picture.
     """
+    return read_bounded_image(path, _rgb8)
+
+
+def read_bounded_image(path: PathLike, convert):
+    """``convert(image, path)`` of the Pillow image at ``path``, after checking that it
+    declares at most :data:`MAX_IMAGE_PIXELS` pixels (``ValueError`` naming the file: a
+    decompression bomb is refused before it is decoded)."""
     from PIL import Image  # Pillow only when images are actually read
 
     try:
@@ -38,7 +45,7 @@ def read_image(path: PathLike) -> np.ndarray:
                 if width * height > MAX_IMAGE_PIXELS:
                     raise ValueError(f"{path}: {width}x{height} pixels, more than the "
                                      f"{MAX_IMAGE_PIXELS} an image may have")
-                return _rgb8(image, path)
+                return convert(image, path)
     except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
         raise ValueError(f"{path}: refused as a decompression bomb ({exc})") from None
 
