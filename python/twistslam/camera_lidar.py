@@ -65,8 +65,20 @@ def estimate_offset(frame: Frame, camera, config: Config,
     z = np.where(depth["valid"], depth["depth"], np.nan)
     out = _lidar.estimate_disparity_offset(disparity, z, camera.fx * camera.baseline,
                                            min_samples=config.lidar.offset_min_samples)
-    reason = "" if out["valid"] else (
-        f"{out['num_samples']} keypoints with a stereo and a LiDAR depth, "
-        f"{config.lidar.offset_min_samples} needed")
-    return OffsetEstimate(bool(out["valid"]), float(out["offset_px"]), float(out["mad_px"]),
-                          int(out["num_samples"]), reason)
+    valid, offset, mad, n = (bool(out["valid"]), float(out["offset_px"]), float(out["mad_px"]),
+                             int(out["num_samples"]))
+    if not valid:
+        return OffsetEstimate(False, 0.0, mad, n, f"{n} keypoints with a stereo and a LiDAR "
+                              f"depth, {config.lidar.offset_min_samples} needed")
+    standard_error = median_standard_error(mad, n)
+    if abs(offset) < config.lidar.offset_min_significance * standard_error:
+        return OffsetEstimate(False, 0.0, mad, n, f"{offset:+.3f} px is within "
+                              f"{config.lidar.offset_min_significance:g} standard errors "
+                              f"({standard_error:.3f} px) of 0")
+    return OffsetEstimate(True, offset, mad, n)
+
+
+def median_standard_error(mad: float, n: int) -> float:
+    """Standard error of the median of ``n`` samples with this median absolute deviation
+    (normal errors: sigma = 1.4826 MAD, SE = 1.2533 sigma / sqrt(n))."""
+    return 1.2533 * 1.4826 * mad / max(n, 1) ** 0.5

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from ._settings import param
 
 #: fields read in Python, not passed to the C++ core
-PYTHON_ONLY = ("disparity_offset", "offset_min_samples")
+PYTHON_ONLY = ("disparity_offset", "offset_min_samples", "offset_min_significance")
 
 
 def _auto_or_float(value: str, key: str, bound: float) -> float | None:
@@ -51,6 +51,11 @@ class LidarConfig:
         100, "keypoints with both a stereo and a LiDAR depth needed to estimate the offset; "
         "a real KITTI frame gives ~500, the MAD of ~0.3 px makes 100 a 0.04 px median error",
         "keypoints", lo=3, hi=1000000)
+    offset_min_significance: float = param(
+        3.0, "an estimated offset is applied only when it is this many standard errors from 0 "
+        "(SE of a median = 1.2533 x 1.4826 MAD / sqrt(n)): on real KITTI 0001 0.76 px is 40 SE "
+        "from 0; on the exact simulator 0.03 px is 0.7 SE and is noise that moved ATE",
+        "standard errors", lo=0.0, hi=100.0)
     cell_size_px: float = param(8.0, "side of the scan's pixel buckets (>= search radius: "
                                 "a query visits at most 3 x 3 buckets)", "px", lo=1.0, hi=1024.0)
     search_radius_px: float = param(6.0, "returns this close to a keypoint form its "
