@@ -27,6 +27,9 @@ FieldTable tracker_fields(o::TrackerOptions& t) {
       {"optimize", set(&t.optimize)}, {"window", set(&t.window)},
       {"report_tentative_frames", set(&t.report_tentative_frames)},
       {"max_reported_gap", set(&t.max_reported_gap)},
+      {"range_score_start", set(&t.range_score_start)}, {"range_score_slope", set(&t.range_score_slope)},
+      {"backcast_frames", set(&t.backcast_frames)}, {"backcast_min_range", set(&t.backcast_min_range)},
+      {"interpolate_gaps", set(&t.interpolate_gaps)}, {"miss_turn_decay", set(&t.miss_turn_decay)},
       {"const_sigma_translation", set(&w.const_sigma_translation)},
       {"const_sigma_rotation", set(&w.const_sigma_rotation)},
       {"det_sigma_translation", set(&w.det_sigma_translation)},
@@ -52,15 +55,20 @@ o::TrackerOptions parse_tracker_options(const py::dict& options) {
   return t;
 }
 
-// One track as numpy arrays (K = its frames).
+// One track as numpy arrays (K = its backcast frames, then its frames).
 py::dict track_to_dict(const o::ObjectTrack& t) {
-  const auto K = static_cast<py::ssize_t>(t.frames.size());
+  std::vector<const o::TrackFrame*> rows;
+  rows.reserve(t.backcast.size() + t.frames.size());
+  for (const auto& f : t.backcast) rows.push_back(&f);
+  for (const auto& f : t.frames) rows.push_back(&f);
+  const auto K = static_cast<py::ssize_t>(rows.size());
   DoubleArray poses = new_array({K, 4, 4}), detected_poses = new_array({K, 4, 4});
   DoubleArray twists = new_array({K, 6}), scores = new_array({K}), sizes = new_array({K, 3});
+  DoubleArray ranges = new_array({K}), confidences = new_array({K});
   py::array_t<std::int64_t> frames(K), det_index(K);
   py::array_t<bool> detected(K), reported(K);
   for (py::ssize_t k = 0; k < K; ++k) {
-    const auto& f = t.frames[k];
+    const auto& f = *rows[k];
     for (int r = 0; r < 4; ++r)
       for (int c = 0; c < 4; ++c) {
         poses.mutable_data()[k * 16 + r * 4 + c] = f.T_w_o(r, c);
@@ -69,6 +77,8 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
     for (int i = 0; i < 6; ++i) twists.mutable_data()[k * 6 + i] = f.xi[i];
     for (int i = 0; i < 3; ++i) sizes.mutable_data()[k * 3 + i] = f.detected_size[i];
     scores.mutable_data()[k] = f.score;
+    ranges.mutable_data()[k] = f.range;
+    confidences.mutable_data()[k] = f.confidence;
     frames.mutable_data()[k] = f.frame;
     det_index.mutable_data()[k] = f.detection_index;
     detected.mutable_data()[k] = f.detected;
@@ -77,10 +87,12 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
   return py::dict("id"_a = t.id, "class_id"_a = t.class_id, "state"_a = o::to_string(t.state),
                   "link"_a = t.link == geometry::LinkType::kPlanar ? "planar" : "free",
                   "size"_a = to_numpy(t.size), "hits"_a = t.hits, "confirmed_frame"_a = t.confirmed_frame,
-                  "mean_score"_a = t.mean_score(), "frames"_a = frames, "T_w_o"_a = poses,
-                  "T_w_o_detected"_a = detected_poses, "twist"_a = twists, "detected"_a = detected,
-                  "reported"_a = reported, "score"_a = scores, "detected_size"_a = sizes,
-                  "detection_index"_a = det_index);
+                  "mean_score"_a = t.mean_score(), "confidence"_a = t.confidence(),
+                  "backcast"_a = static_cast<int>(t.backcast.size()), "frames"_a = frames,
+                  "T_w_o"_a = poses, "T_w_o_detected"_a = detected_poses, "twist"_a = twists,
+                  "detected"_a = detected, "reported"_a = reported, "score"_a = scores,
+                  "range"_a = ranges, "frame_confidence"_a = confidences,
+                  "detected_size"_a = sizes, "detection_index"_a = det_index);
 }
 
 }  // namespace
@@ -184,9 +196,12 @@ ValueError
            },
            R"doc(Every track born so far (dead ones included), each a dict of numpy arrays:
 ``id``, ``class_id``, ``state``, ``link``, ``size`` (3,) l w h (median of the detections),
-``hits``, ``confirmed_frame``, ``mean_score``, and per frame of the track (K rows, consecutive
-frames): ``frames``, ``T_w_o`` (K, 4, 4), ``T_w_o_detected``, ``twist`` (K, 6) to the next
-frame, ``detected``, ``reported`` (the output policy), ``score``, ``detected_size``,
+``hits``, ``confirmed_frame``, ``mean_score``, ``confidence`` (mean range-corrected score: the
+track score of the results), ``backcast`` (number of leading rows predicted before the first
+frame), and per frame of the track (K rows, consecutive frames, the backcast first):
+``frames``, ``T_w_o`` (K, 4, 4), ``T_w_o_detected``, ``twist`` (K, 6) to the next frame,
+``detected``, ``reported`` (the output policy), ``score`` (the detector's), ``range`` (m from
+the camera), ``frame_confidence`` (range-corrected score), ``detected_size``,
 ``detection_index``.)doc")
       .def_property_readonly("num_live", &o::Tracker::num_live, "Tracks not dead.")
       .def_property_readonly("last_frame", &o::Tracker::last_frame, "Last frame stepped (-1: none).");

@@ -30,6 +30,15 @@ double ObjectTrack::mean_score() const {
   return n ? sum / n : 0.0;
 }
 
+double ObjectTrack::confidence() const {
+  double sum = 0;
+  int n = 0;
+  for (const auto& f : frames) {
+    if (f.detected) sum += f.confidence, ++n;
+  }
+  return n ? sum / n : 0.0;
+}
+
 void ObjectTrack::update_size() {
   std::vector<double> dim;
   for (int d = 0; d < 3; ++d) {

@@ -31,7 +31,9 @@ struct TrackFrame {
   bool detected = false;          // a detection was associated in this frame
   Mat4 T_w_o_detected = Mat4::Identity();  // that detection's box pose, heading aligned
   Vec3 detected_size = Vec3::Zero();       // its l, w, h (m)
-  double score = 0;               // its score
+  double score = 0;               // its score (the detector's)
+  double range = 0;               // its distance from the camera, m
+  double confidence = 0;          // its range-corrected score (TrackerOptions)
   int detection_index = -1;       // its index in the frame's detection list
   bool reported = false;          // part of the output (set by the tracker's output policy)
 };
@@ -43,6 +45,9 @@ struct ObjectTrack {
   Mat6 Pi = Mat6::Identity();  // the link's projector
   TrackState state = TrackState::kTentative;
   std::vector<TrackFrame> frames;  // consecutive frames, birth first
+  // Output only: predictions before the first frame, oldest first, consecutive up to it
+  // (the tracker's backcast of a far-born track; never detected, always reported).
+  std::vector<TrackFrame> backcast;
   Vec3 size = Vec3::Zero();        // l, w, h: per-dimension median of the detections (paper)
   int hits = 0;                    // frames with an associated detection
   int misses = 0;                  // consecutive frames without one, up to the last frame
@@ -57,6 +62,8 @@ struct ObjectTrack {
   const TrackFrame* at(int frame) const;
   // Mean score of the associated detections (0 without any).
   double mean_score() const;
+  // Track confidence: mean range-corrected score of the associated detections (0 without any).
+  double confidence() const;
   // Recomputes `size` as the per-dimension median over the detected frames.
   void update_size();
 };

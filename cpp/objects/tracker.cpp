@@ -1,9 +1,11 @@
 #include "objects/tracker.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
+#include "geometry/box_overlap.hpp"
 #include "geometry/se3.hpp"
 #include "objects/assignment.hpp"
 #include "objects/motion_model.hpp"
@@ -20,8 +22,17 @@ geometry::Box3D box_at(const Mat4& T_w_o, const Vec3& size) {
   return b;
 }
 
+double range_corrected_score(double score, double range, const TrackerOptions& options) {
+  return score + options.range_score_slope * std::max(0.0, range - options.range_score_start);
+}
+
 Tracker::Tracker(const TrackerOptions& options) : options_(options) {
   if (options_.window < 2) throw std::invalid_argument("tracker: window must be >= 2 frames");
+  if (options_.backcast_frames < 0) throw std::invalid_argument("tracker: backcast_frames must be >= 0");
+  if (!(options_.miss_turn_decay >= 0 && options_.miss_turn_decay <= 1))
+    throw std::invalid_argument("tracker: miss_turn_decay must be in [0, 1]");
+  if (!std::isfinite(options_.range_score_slope) || !std::isfinite(options_.range_score_start))
+    throw std::invalid_argument("tracker: range_score_start and range_score_slope must be finite");
   if (options_.birth_hits < 1) throw std::invalid_argument("tracker: birth_hits must be >= 1");
   if (!(options_.ground_normal.norm() > 0) || !options_.ground_normal.allFinite())
     throw std::invalid_argument("tracker: ground_normal must be a finite non-zero vector");
@@ -59,14 +70,19 @@ void Tracker::step(int frame, const Mat4& T_w_c, const std::vector<Detection>& d
     for (auto& t : tracks_)
       if (t.alive()) miss_track(t);
   }
+  if (first_frame_ < 0) first_frame_ = frame;
+  // camera poses by frame (skipped frames take this one), for the backcast's range check
+  camera_poses_.resize(frame - first_frame_ + 1, T_w_c);
   last_frame_ = frame;
   predict_all(frame);
 
   std::vector<Mat4> T_w_det(dets.size());
   std::vector<geometry::Box3D> det_boxes(dets.size());
+  std::vector<double> confidence(dets.size());  // range-corrected scores
   for (size_t j = 0; j < dets.size(); ++j) {
     T_w_det[j] = T_w_c * dets[j].box.pose();
     det_boxes[j] = box_at(T_w_det[j], Vec3(dets[j].box.length, dets[j].box.width, dets[j].box.height));
+    confidence[j] = range_corrected_score(dets[j].score, dets[j].box.center.norm(), options_);
   }
   std::vector<int> live;
   for (int i = 0; i < static_cast<int>(tracks_.size()); ++i)
@@ -82,15 +98,15 @@ void Tracker::step(int frame, const Mat4& T_w_c, const std::vector<Detection>& d
     const auto cost = association_cost(tb, tc, db, dc, options_.metric);
     for (const auto& [r, c] : solve_assignment(cost, max_cost)) {
       const int i = tr[r], j = de[c];
-      update_track(tracks_[i], T_w_det[j], dets[j], j);
+      update_track(tracks_[i], T_w_det[j], dets[j], j, confidence[j]);
       track_done[i] = det_done[j] = 1;
     }
   };
 
   std::vector<int> high, low;
   for (int j = 0; j < static_cast<int>(dets.size()); ++j) {
-    if (dets[j].score >= options_.high_score) high.push_back(j);
-    else if (dets[j].score >= options_.low_score) low.push_back(j);
+    if (confidence[j] >= options_.high_score) high.push_back(j);
+    else if (confidence[j] >= options_.low_score) low.push_back(j);
   }
   associate(live, high, options_.max_cost);
   if (options_.second_pass && !low.empty()) {
@@ -102,7 +118,7 @@ void Tracker::step(int frame, const Mat4& T_w_c, const std::vector<Detection>& d
   for (int i : live)
     if (!track_done[i]) miss_track(tracks_[i]);
   for (int j : high)
-    if (!det_done[j] && dets[j].score >= options_.birth_score) birth(frame, T_w_det[j], dets[j], j);
+    if (!det_done[j] && confidence[j] >= options_.birth_score) birth(frame, T_w_det[j], dets[j], j, confidence[j]);
 }
 
 void Tracker::predict_all(int frame) {
@@ -110,13 +126,23 @@ void Tracker::predict_all(int frame) {
     if (!t.alive()) continue;
     TrackFrame next;
     next.frame = frame;
-    next.T_w_o = predict_pose(t.last().T_w_o, t.last().xi, t.Pi);
-    next.xi = t.last().xi;  // constant velocity until observed again
+    const TrackFrame& last = t.last();
+    next.xi = last.xi;  // constant velocity until observed again...
+    if (!last.detected && options_.miss_turn_decay < 1) {
+      // ...but a turn rate from a few noisy box headings is not extrapolated for long: from
+      // the first missed frame on, the rotation of the body-frame twist (the car's own yaw
+      // rate) decays by miss_turn_decay per frame, its forward speed is kept.
+      Vec6 body = geometry::se3_adjoint(geometry::se3_inverse(last.T_w_o)) * next.xi;
+      body.tail<3>() *= options_.miss_turn_decay;
+      next.xi = geometry::se3_adjoint(last.T_w_o) * body;
+    }
+    next.T_w_o = predict_pose(last.T_w_o, next.xi, t.Pi);
     t.frames.push_back(next);
   }
 }
 
-void Tracker::update_track(ObjectTrack& t, const Mat4& T_w_detected, const Detection& det, int index) {
+void Tracker::update_track(ObjectTrack& t, const Mat4& T_w_detected, const Detection& det, int index,
+                           double confidence) {
   TrackFrame& f = t.last();
   // The same box with its heading turned by pi is one object, not a new one: align the
   // detection's heading with the track's (predicted) heading.
@@ -124,8 +150,23 @@ void Tracker::update_track(ObjectTrack& t, const Mat4& T_w_detected, const Detec
   f.detected = true;
   f.detected_size = Vec3(det.box.length, det.box.width, det.box.height);
   f.score = det.score;
+  f.range = det.box.center.norm();
+  f.confidence = confidence;
   f.detection_index = index;
   f.T_w_o = f.T_w_o_detected;  // initial value; refined by the window
+  // The frames missed since the previous detection held forward predictions: now that both
+  // ends are known they are interpolated (constant twist from the last estimate to this
+  // detection under the link), which the window then refines where it reaches.
+  if (options_.interpolate_gaps && t.misses > 0) {
+    const int n = static_cast<int>(t.frames.size());
+    const int a = n - 1 - t.misses - 1;  // the last frame before the gap
+    if (a >= 0) {
+      const Mat4& T_a = t.frames[a].T_w_o;
+      const Vec6 xi = t.Pi * geometry::twist_between(T_a, f.T_w_o);
+      const double span = n - 1 - a;
+      for (int k = a + 1; k < n - 1; ++k) t.frames[k].T_w_o = geometry::se3_exp(((k - a) / span) * xi) * T_a;
+    }
+  }
   ++t.hits;
   t.misses = 0;
   t.update_size();
@@ -147,7 +188,8 @@ void Tracker::miss_track(ObjectTrack& t) {
   }
 }
 
-void Tracker::birth(int frame, const Mat4& T_w_detected, const Detection& det, int index) {
+void Tracker::birth(int frame, const Mat4& T_w_detected, const Detection& det, int index,
+                    double confidence) {
   ObjectTrack t;
   t.id = next_id_++;
   t.class_id = det.class_id;
@@ -159,6 +201,8 @@ void Tracker::birth(int frame, const Mat4& T_w_detected, const Detection& det, i
   f.detected = true;
   f.detected_size = Vec3(det.box.length, det.box.width, det.box.height);
   f.score = det.score;
+  f.range = det.box.center.norm();
+  f.confidence = confidence;
   f.detection_index = index;
   t.frames.push_back(f);
   t.hits = 1;
@@ -184,7 +228,9 @@ void Tracker::optimize_window(ObjectTrack& t) {
       const TrackFrame& f = t.frames[k];
       optim::ObjectWindowFrame w;
       w.T_w_o = f.T_w_o;
-      w.fixed = k < first_free;
+      // without e_const nothing ties a frame without detection to the others (e_link only
+      // restricts the direction of its motion): it keeps its interpolated / predicted pose
+      w.fixed = k < first_free || (!f.detected && !options_.window_options.use_const);
       w.has_detection = f.detected;
       w.T_w_o_detected = f.T_w_o_detected;
       window.push_back(w);
@@ -208,13 +254,53 @@ void Tracker::set_reported_flags() {
       f.reported = false;
       if (!t.ever_confirmed() || !f.detected) continue;
       f.reported = options_.report_tentative_frames || f.frame >= t.confirmed_frame;
-      // a short gap between two detections: the smoothed prediction is reported
+      // a short gap between two detections: its interpolated, smoothed poses are reported
       if (f.reported && last_detected >= 0 && k - last_detected - 1 <= options_.max_reported_gap)
         for (int g = last_detected + 1; g < k; ++g)
           t.frames[g].reported = options_.report_tentative_frames || t.frames[g].frame >= t.confirmed_frame;
       last_detected = k;
     }
   }
+  for (auto& t : tracks_) set_backcast(t);
+}
+
+void Tracker::set_backcast(ObjectTrack& t) const {
+  t.backcast.clear();
+  if (!t.ever_confirmed() || t.frames.empty() || options_.backcast_frames <= 0) return;
+  const TrackFrame& first = t.frames.front();
+  if (!first.detected || first.range < options_.backcast_min_range) return;
+  // Backwards under the link with the first twist (eq. 2 inverted): T(f-1) = exp(-Pi xi) T(f).
+  // Stops at the first frame stepped; where the box comes nearer than backcast_min_range or
+  // behind the camera (the detector would have seen it; a wild twist); and where it would
+  // overlap a box another track reports (the object was already tracked: a fragment).
+  const Vec6 xi = t.frames.size() > 1 ? t.frames.front().xi : Vec6::Zero();
+  Mat4 T = first.T_w_o;
+  for (int k = 1; k <= options_.backcast_frames; ++k) {
+    const int frame = first.frame - k;
+    if (frame < first_frame_) break;
+    T = predict_pose(T, -xi, t.Pi);
+    const Mat4 T_c_o = geometry::se3_inverse(camera_poses_[frame - first_frame_]) * T;
+    const Vec3 p_c = T_c_o.block<3, 1>(0, 3);
+    if (p_c.z() <= 0 || p_c.norm() < options_.backcast_min_range) break;
+    const geometry::Box3D box = box_at(T, t.size);
+    bool taken = false;
+    for (const auto& other : tracks_) {
+      if (&other == &t || other.class_id != t.class_id) continue;
+      const TrackFrame* o = other.at(frame);
+      if (o && o->reported && geometry::iou_bev(box, box_at(o->T_w_o, other.size)) > 0) {
+        taken = true;
+        break;
+      }
+    }
+    if (taken) break;
+    TrackFrame b;
+    b.frame = frame;
+    b.T_w_o = T;
+    b.xi = xi;
+    b.reported = true;
+    t.backcast.push_back(b);
+  }
+  std::reverse(t.backcast.begin(), t.backcast.end());  // oldest first
 }
 
 const std::vector<ObjectTrack>& Tracker::tracks() {

@@ -37,8 +37,12 @@ def _open(root: Path, seq: str):
         return open_sequence(root, seq)
 
 
-def _overlap_fraction(boxes, gt) -> float:
-    """Fraction of the rows of ``boxes`` with 3D IoU >= 0.25 with a row of ``gt`` of their frame."""
+def _overlap_fraction(boxes, gt, max_range: float = 40.0) -> float:
+    """Fraction of the rows of ``boxes`` within ``max_range`` of the camera with 3D IoU >= 0.25
+    with a row of ``gt`` of their frame. Farther, KITTI's labels thin out (the devkit ignores
+    unmatched boxes under 25 px, ~45 m for a car) and the tracker reports predicted boxes of
+    far cars before their first detection (objects.backcast_*), mostly unlabelled there."""
+    boxes = boxes.select(np.hypot(boxes.box_3d[:, 0], boxes.box_3d[:, 2]) < max_range)
     hits = 0
     for f in np.unique(boxes.frame):
         rows, labels = boxes.frame == f, gt.frame == f
@@ -214,10 +218,11 @@ def test_real_0001_result_file(seq_0001, result_0001, saved_0001):
     assert np.allclose(table.score, result_0001.thresholded().score, atol=1e-5)
     assert (table.score >= result_0001.min_track_score).all()
     assert table.frame.min() >= 0 and table.frame.max() < len(seq_0001)
-    # boxes in the camera frame, on the labelled cars: 0.86 of them with the defaults
+    # boxes in the camera frame, on the labelled cars: 0.90 of those within 40 m with the
+    # defaults (0.64 of all: see _overlap_fraction)
     gt = seq_0001.gt_objects
     gt = gt.select(np.isin(gt.cls, ["Car", "Van"]))
-    assert _overlap_fraction(table, gt) >= 0.7
+    assert _overlap_fraction(table, gt) >= 0.8
 
 
 def test_real_0001_tracked_objects(seq_0001, result_0001):
@@ -293,6 +298,85 @@ def test_cli_run_0006_writes_tracking(kitti_tracking, tmp_path, capsys):
     table = read_tracking_results(out / "tracking" / "0006.txt")
     assert len(table) > 100 and set(table.cls) == {"Car"}
     assert "camera frame" in capsys.readouterr().out
+
+
+# ------------------------------------------- output policy: confidence, backcast, gaps (real)
+
+
+def test_real_0001_track_score_is_the_range_corrected_confidence(result_0001):
+    cfg = Config().objects
+    far = 0
+    for o in result_0001.objects:
+        det = o.detected
+        corrected = o.score[det] + cfg.range_score_slope * np.maximum(
+            0.0, o.range[det] - cfg.range_score_start)
+        assert o.confidence == pytest.approx(corrected.mean())
+        far += int(o.confidence > o.mean_score + 1e-9)
+        rows = result_0001.tracking.track_id == o.track_id
+        assert np.allclose(result_0001.tracking.score[rows], o.confidence)
+    assert far > 10, "far tracks gain confidence"
+    kept = {o.track_id for o in result_0001.objects if o.confidence >= cfg.min_track_score}
+    assert set(result_0001.thresholded().track_ids) == kept & set(result_0001.tracking.track_ids)
+
+
+def test_real_0001_backcast_rows(result_0001, seq_0001):
+    cfg = Config().objects
+    backcast = [o for o in result_0001.objects if o.backcast]
+    assert len(backcast) > 10
+    for o in backcast:
+        b = o.backcast
+        assert b <= cfg.backcast_frames
+        assert not o.detected[:b].any() and o.detected[b], "backcast rows precede the first detection"
+        assert o.range[b] >= cfg.backcast_min_range
+        assert (o.score[:b] == 0).all()
+        # reported, each in front of its camera and at least backcast_min_range away
+        T_c_w = np.linalg.inv(seq_0001.gt_poses[o.frames[:b]])
+        p = np.einsum("kij,kj->ki", T_c_w[:, :3], np.c_[o.T_w_o[:b, :3, 3], np.ones(b)])
+        assert (p[:, 2] > 0).all()
+        assert (np.linalg.norm(p, axis=1) >= cfg.backcast_min_range - 1e-6).all()
+        assert o.reported[:b].all()
+    assert all(o.backcast == 0 or o.range[o.backcast] >= cfg.backcast_min_range
+               for o in result_0001.objects)
+
+
+@pytest.fixture(scope="module")
+def policy_ablation(kitti_tracking, tmp_path_factory):
+    """MOTA (devkit protocol) on two validation sequences with the defaults and with each of
+    the output-policy features of issue 8 off."""
+    from twistslam.eval.mot import evaluate_mot
+
+    variants = {"defaults": {}, "raw score": {"range_score_slope": 0.0},
+                "no backcast": {"backcast_frames": 0}, "no interpolation": {"interpolate_gaps": False}}
+    seqs = ["0006", "0010"]
+    out = {}
+    for name, change in variants.items():
+        config = Config()
+        for k, v in change.items():
+            setattr(config.objects, k, v)
+        res = tmp_path_factory.mktemp(name.replace(" ", "_"))
+        for seq in seqs:
+            r = track_detections(_open(kitti_tracking, seq), kitti_tracking.joinpath(*DETECTIONS), config)
+            r.save(res)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            every = res / "every"
+            every.mkdir()
+            (every / "tracking").symlink_to(res / "tracking_all")
+            out[name] = evaluate_mot(kitti_tracking, every, seqs, protocol="kitti",
+                                     min_score=config.objects.min_track_score).overall
+    return out
+
+
+def test_real_output_policy_features_each_help(policy_ablation):
+    # measured: MOTA 96.1 (FP 19, FN 23); raw score 89.5 (FN 108); no backcast 93.1 (FN 55);
+    # interpolation makes no difference on these two (tests/cpp/objects/test_tracker_policy.cpp)
+    d = policy_ablation["defaults"]
+    assert d.mota > 94 and d.idsw == 0
+    assert policy_ablation["raw score"].mota < d.mota - 4  # far cars fall under the threshold
+    assert policy_ablation["raw score"].fn > d.fn + 50
+    assert policy_ablation["no backcast"].fn > d.fn + 20   # far births reported earlier
+    assert policy_ablation["no backcast"].mota < d.mota - 2
+    assert policy_ablation["no interpolation"].mota <= d.mota
 
 
 # ------------------------------------------------------------------------------- config section

@@ -22,7 +22,8 @@ class TrackedObject:
     cls : class name (KITTI type).
     state : ``"confirmed"``, ``"lost"``, ``"tentative"`` or ``"dead"`` at the end of the run.
     link : ``"planar"`` (3 DoF on the ground plane) or ``"free"``.
-    frames : (K,) consecutive frames from birth to the last frame kept alive.
+    frames : (K,) consecutive frames from birth to the last frame kept alive, preceded by the
+        ``backcast`` frames the output policy predicted before the first detection.
     T_w_o : (K, 4, 4) pose in the tracking frame (:attr:`ObjectsResult.frame`), after the
         sliding-window optimisation; object frame = box frame (x along the length, y down).
     size : (3,) length, width, height (m): per-dimension median of the detections.
@@ -31,6 +32,11 @@ class TrackedObject:
     detected : (K,) bool, a detection was associated in that frame.
     reported : (K,) bool, the row is written to the results (output policy, docs/objects.md).
     score : (K,) score of the associated detection (0 where none); ``mean_score`` their mean.
+    confidence : the track's confidence, the mean range-corrected score of its detections
+        (``objects.range_score_*``): the score of its result rows, what ``min_track_score``
+        compares.
+    range : (K,) distance of the associated detection from the camera, m (0 where none).
+    backcast : number of leading rows predicted before the first detection (backcast).
     """
 
     track_id: int
@@ -45,6 +51,9 @@ class TrackedObject:
     reported: np.ndarray
     score: np.ndarray
     mean_score: float
+    confidence: float = 0.0
+    range: np.ndarray | None = None
+    backcast: int = 0
 
     def __repr__(self) -> str:
         return (f"TrackedObject(id={self.track_id}, {self.cls}, {self.state}, frames "
@@ -59,8 +68,8 @@ class ObjectsResult:
     ----------
     objects : every track ever confirmed (never-confirmed tentative tracks are left out).
     tracking : the reported boxes as an ObjectTable in each frame's camera frame, one row per
-        (frame, track), score = the track's mean detection score: what ``tracking/SEQ.txt``
-        holds before ``min_track_score`` is applied.
+        (frame, track), score = the track's confidence: what ``tracking/SEQ.txt`` holds before
+        ``min_track_score`` is applied.
     frame : ``"world"`` (camera poses known: world = camera of the first frame) or
         ``"camera"`` (each frame's camera frame, as AB3DMOT).
     min_track_score : the threshold applied when writing ``tracking/SEQ.txt``.
@@ -90,7 +99,7 @@ class ObjectsResult:
         return len(self.timings.frame_ms) / (total / 1e3) if total > 0 else float("nan")
 
     def thresholded(self) -> ObjectTable:
-        """The rows of tracks whose mean score is at least ``min_track_score``."""
+        """The rows of tracks whose confidence is at least ``min_track_score``."""
         return self.tracking.select(self.tracking.score >= self.min_track_score)
 
     def save(self, out_dir: str | Path) -> dict[str, Path]:

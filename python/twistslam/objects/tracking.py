@@ -121,25 +121,35 @@ def _results(tracks: list[dict], names: list[str], T_w_c: np.ndarray, calib, ima
         if t["confirmed_frame"] < 0:
             continue
         cls = names[t["class_id"]]
+        reported = t["reported"].copy()
+        rows = np.flatnonzero(reported)
+        frames = t["frames"][rows]
+        box_3d = _camera_frame_boxes(T_c_w[frames], t["T_w_o"][rows], t["size"])
+        if calib is not None:
+            box_2d = geometry.project_boxes(box_3d, calib.P2, *image_size)
+            visible = np.isfinite(box_2d).all(axis=1)  # NaN: every corner behind the camera
+        else:  # no calibration: the devkit's "no 2D box" placeholder
+            box_2d = np.full((len(rows), 4), -1.0)
+            visible = box_3d[:, 2] > 0
+        # A predicted box behind the camera (a wild extrapolation) is no observation: the
+        # output policy drops it rather than write an unreadable line.
+        reported[rows[~visible]] = False
+        rows, frames, box_3d, box_2d = rows[visible], frames[visible], box_3d[visible], box_2d[visible]
         objects.append(TrackedObject(
             track_id=t["id"], cls=cls, state=t["state"], link=t["link"], frames=t["frames"],
             T_w_o=t["T_w_o"], size=t["size"], velocity_kmh=_speed_kmh(t["T_w_o"], period),
-            detected=t["detected"], reported=t["reported"], score=t["score"],
-            mean_score=t["mean_score"]))
-        rows = np.flatnonzero(t["reported"])
+            detected=t["detected"], reported=reported, score=t["score"],
+            mean_score=t["mean_score"], confidence=t["confidence"], range=t["range"],
+            backcast=t["backcast"]))
         if not len(rows):
             continue
-        frames = t["frames"][rows]
-        box_3d = _camera_frame_boxes(T_c_w[frames], t["T_w_o"][rows], t["size"])
-        box_2d = (geometry.project_boxes(box_3d, calib.P2, *image_size) if calib is not None
-                  else np.full((len(rows), 4), np.nan))
         alpha = box_3d[:, 6] - np.arctan2(box_3d[:, 0], box_3d[:, 2])
         n = len(rows)
         tables.append(ObjectTable(
             frame=frames, track_id=np.full(n, t["id"]), cls=np.full(n, cls),
             truncation=np.full(n, -1.0), occlusion=np.full(n, -1),
             alpha=np.arctan2(np.sin(alpha), np.cos(alpha)), box_2d=box_2d, box_3d=box_3d,
-            score=np.full(n, t["mean_score"])))
+            score=np.full(n, t["confidence"])))
     table = ObjectTable.concat(tables).sorted() if tables else ObjectTable.empty()
     return objects, table
 

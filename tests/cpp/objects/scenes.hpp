@@ -87,6 +87,12 @@ inline twistslam::objects::TrackerOptions options() {
   o.optimize = true;
   o.report_tentative_frames = true;
   o.max_reported_gap = 3;
+  o.interpolate_gaps = true;
+  o.miss_turn_decay = 1.0;  // constant velocity through misses (the motion model's exact case)
+  o.range_score_slope = 0;  // raw scores: the scenes' cars are near anyway
+  o.range_score_start = 35;
+  o.backcast_frames = 0;    // no backcast unless a test asks for it
+  o.backcast_min_range = 45;
   return o;
 }
 
