@@ -274,3 +274,15 @@ def test_devkit_equals_reference_implementation(tmp_path, seed):
     assert ours.motp == pytest.approx(100.0 * ref.MOTP, abs=1e-6)  # IoU via ConvexHull there
     assert ours.mt == pytest.approx(100.0 * ref.MT, abs=1e-9)
     assert ours.ml == pytest.approx(100.0 * ref.ML, abs=1e-9)
+
+
+def test_sequence_without_a_labelled_car_is_evaluated(kitti_tracking, tmp_path):
+    """0017 has no Car / Van label: its tracks are all false positives, not a crash."""
+    labels = read_labels(kitti_tracking / "training" / "label_02" / "0017.txt")
+    assert not np.isin(labels.cls, ["Car", "Van"]).any()
+    (tmp_path / "tracking").mkdir()
+    (tmp_path / "tracking" / "0017.txt").write_text(
+        "0 1 Car 0 0 0.0 100 100 200 200 1.5 1.6 4.0 1.0 1.5 20.0 0.0 5.0\n")
+    r = evaluate_mot(kitti_tracking, tmp_path, ["0017"], protocol="kitti")
+    assert r.overall.n_gt == 0 and r.overall.idsw == 0 and r.overall.fn == 0
+    assert np.isnan(r.overall.mota)  # undefined without ground truth, not a crash

@@ -38,6 +38,8 @@ def devkit_histories(m: Matching) -> Iterator[tuple[int, np.ndarray, np.ndarray]
     *all* its frames in frame order (-1 where missed), the neighbour class included."""
     ids = m.matched_track_id
     order = np.lexsort((m.gt.frame, m.gt.track_id))
+    if len(order) == 0:  # a sequence without a box of the class (e.g. 0017 has no car)
+        return
     tracks = m.gt.track_id[order]
     starts = np.flatnonzero(np.r_[True, tracks[1:] != tracks[:-1]])
     for rows in np.split(order, starts[1:]):
