@@ -13,6 +13,7 @@ void bind_slam(py::module_& m);
 void bind_slam_options(py::module_& m);
 void bind_objects(py::module_& m);
 void bind_lidar(py::module_& m);
+void bind_perception(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -33,4 +34,6 @@ PYBIND11_MODULE(_core, m) {
   twistslam::bindings::bind_objects(objects);
   py::module_ lidar = m.def_submodule("lidar", "LiDAR depth of keypoints, KITTI scan correction");
   twistslam::bindings::bind_lidar(lidar);
+  py::module_ perception = m.def_submodule("perception", "dense optical flow (OpenCV DIS)");
+  twistslam::bindings::bind_perception(perception);
 }

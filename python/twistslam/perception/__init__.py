@@ -1,0 +1,9 @@
+"""Perception stages: callables from :class:`~twistslam.datasets.Frame` to numpy arrays
+(optical flow now; panoptic segmentation next), each with interchangeable sources."""
+
+from .flow import DisFlow, DisOptions, FileFlow, flow_source
+from .flow_files import read_flo, read_kitti_flow, write_flo, write_kitti_flow
+from .stage import FlowStage, TimedStage, check_flow
+
+__all__ = ["DisFlow", "DisOptions", "FileFlow", "FlowStage", "TimedStage", "check_flow", "flow_source",
+           "read_flo", "read_kitti_flow", "write_flo", "write_kitti_flow"]
