@@ -164,8 +164,8 @@ def test_dis_against_the_simulator_exact_flow(sim_sequence):
 def test_flow_source_choices(sim_sequence, tmp_path):
     assert isinstance(flow_source("auto", None), DisFlow)
     assert isinstance(flow_source("files", sim_sequence, occlusions="occ"), FileFlow)
-    with pytest.raises(ValueError, match="flow source 'raft': expected one of auto, files, dis"):
-        flow_source("raft", sim_sequence)
+    with pytest.raises(ValueError, match="flow source 'flownet': expected one of auto, files, dis, raft"):
+        flow_source("flownet", sim_sequence)
     with pytest.raises(ValueError, match="expected 'noc' or 'occ'"):
         flow_source("files", sim_sequence, occlusions="all")
     files = flow_source("files", sim_sequence)

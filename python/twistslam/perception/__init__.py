@@ -3,7 +3,8 @@
 
 from .flow import DisFlow, DisOptions, FileFlow, flow_source
 from .flow_files import read_flo, read_kitti_flow, write_flo, write_kitti_flow
+from .flow_raft import RaftFlow, load_raft
 from .stage import FlowStage, TimedStage, check_flow
 
-__all__ = ["DisFlow", "DisOptions", "FileFlow", "FlowStage", "TimedStage", "check_flow", "flow_source",
-           "read_flo", "read_kitti_flow", "write_flo", "write_kitti_flow"]
+__all__ = ["DisFlow", "DisOptions", "FileFlow", "FlowStage", "RaftFlow", "TimedStage", "check_flow",
+           "flow_source", "load_raft", "read_flo", "read_kitti_flow", "write_flo", "write_kitti_flow"]

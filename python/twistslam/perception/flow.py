@@ -7,6 +7,7 @@ the current :class:`~twistslam.datasets.Frame`, it returns (H, W, 2) float32 (u,
   PNG; ``.flo`` is read too). File N holds the flow from frame N to frame N + 1, as the
   simulator writes it (and as KITTI's ``NNNNNN_10.png`` is the flow from image 10 to 11).
 - ``dis``: OpenCV DIS in the C++ core, the default classical source (no weights).
+- ``raft``: torchvision RAFT from a weight file the user names (:mod:`.flow_raft`).
 """
 
 from __future__ import annotations
@@ -20,9 +21,10 @@ from twistslam import _core
 from twistslam.datasets import Frame
 
 from .flow_files import read_flo, read_kitti_flow
+from .flow_raft import RaftFlow
 from .stage import check_flow
 
-FLOW_KINDS = ("auto", "files", "dis")
+FLOW_KINDS = ("auto", "files", "dis", "raft")
 
 
 @dataclass
@@ -89,16 +91,19 @@ def flow_folder(sequence, occlusions: str = "noc") -> Path | None:
     return folder if folder.is_dir() and any(folder.iterdir()) else None
 
 
-def flow_source(kind: str = "auto", sequence=None, *, occlusions: str = "noc", dis: DisOptions | None = None):
+def flow_source(kind: str = "auto", sequence=None, *, occlusions: str = "noc", dis: DisOptions | None = None,
+                weights: str | Path | None = None, raft_model: str = "raft_small"):
     """The flow stage of ``kind`` for ``sequence``.
 
     Parameters
     ----------
-    kind : "auto" (files when the sequence has them, else DIS), "files" or "dis".
+    kind : "auto" (files when the sequence has them, else DIS), "files", "dis" or "raft".
     sequence : a :class:`~twistslam.datasets.KittiTracking` (needed for "files").
     occlusions : "noc" (pixels visible in both images; the default) or "occ" (also the
         pixels hidden in the next image), the KITTI flow folder read by "files".
     dis : options of the DIS source.
+    weights, raft_model : the RAFT source's state-dict file and architecture
+        ("raft_small" / "raft_large"); "raft" requires ``weights``.
     """
     if kind not in FLOW_KINDS:
         raise ValueError(f"flow source '{kind}': expected one of {', '.join(FLOW_KINDS)}")
@@ -109,4 +114,6 @@ def flow_source(kind: str = "auto", sequence=None, *, occlusions: str = "noc", d
         if folder is None:
             raise FileNotFoundError(f"flow source 'files': {sequence} has no flow_{occlusions}/ files")
         return FileFlow(folder)
+    if kind == "raft":
+        return RaftFlow(weights, raft_model)
     return DisFlow(dis)
