@@ -35,11 +35,17 @@ class BoxMaskConfig:
     #: m below the camera for a point to be a ground candidate: KITTI's camera is 1.65 m
     #: high, and 1.0 m keeps car roofs and walls out while leaving hundreds of road points
     low_point_below_camera_m: float = 1.0
-    #: m, RANSAC inlier distance of the plane fit (KITTI road points scatter ~3-5 cm)
+    #: m, RANSAC inlier distance of the plane fit (a few times the LiDAR's ~2 cm range noise)
     plane_fit_threshold_m: float = 0.1
-    #: m from the plane for a point to be ground (road cells; removed from object hulls):
-    #: 0.2 m keeps the tyres' contact patch out of car masks but the bumper in
-    ground_band_m: float = 0.2
+    #: m from the plane for a point to mark a road cell. Simulator road IoU 0.80 / 0.78 /
+    #: 0.75 at 0.05 / 0.1 / 0.2 (its kerbs are 0.15 m high): 0.1 keeps real KITTI's uneven
+    #: road (28 % of the image is road on 0001; 25 % at 0.05, 30 % at 0.2) without the sidewalk
+    ground_band_m: float = 0.1
+    #: m above the plane for a point inside a box to join the object's hull (lower ones are
+    #: the ground under it). Simulator car IoU 0.886 / 0.877 / 0.834 at 0.05 / 0.1 / 0.2;
+    #: KITTI 0001 unoccluded cars' mask-box IoU 0.84 / 0.81 / 0.78. 0.1 rather than 0.05:
+    #: twice the LiDAR's range noise, for roads less flat than these
+    hull_ground_clearance_m: float = 0.1
     #: m, side of a bird's-eye road cell: ~2 LiDAR rings apart at 20 m
     road_cell_m: float = 0.5
     #: cells of dilation of the road grid (closes ring gaps up to 1 m)
@@ -125,7 +131,7 @@ def panoptic_from_boxes(points_c: np.ndarray, boxes: ObjectTable, P: np.ndarray,
     above = np.ones(len(points), bool)
     if plane is not None:
         class_id[road_mask(points, plane, P, shape, config)] = ROAD
-        above = points @ plane[:3] + plane[3] > config.ground_band_m
+        above = points @ plane[:3] + plane[3] > config.hull_ground_clearance_m
     in_front = points[:, 2] > 0.1  # m: a point at or behind the camera has no pixel
     for k in np.argsort(-boxes.box_3d[:, 2], kind="stable"):  # far to near
         if boxes.cls[k] == DONT_CARE:
