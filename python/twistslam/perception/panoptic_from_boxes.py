@@ -54,6 +54,10 @@ class BoxMaskConfig:
     road_max_range_m: float = 40.0
     #: inside points a box needs for a mask (a hull needs 3 non-collinear points)
     min_box_points: int = 3
+    #: boxes scored below are ignored; ``None`` keeps all (labels score 1). For the real
+    #: PointRCNN detections of 0001, 2.0 puts all car pixels inside labelled objects'
+    #: 2D boxes (98.7 % with every box) at a coverage of 94.3 % (94.7 %) of their points
+    min_score: float | None = None
 
 
 def points_in_box(points: np.ndarray, box: np.ndarray) -> np.ndarray:
@@ -134,7 +138,8 @@ def panoptic_from_boxes(points_c: np.ndarray, boxes: ObjectTable, P: np.ndarray,
         above = points @ plane[:3] + plane[3] > config.hull_ground_clearance_m
     in_front = points[:, 2] > 0.1  # m: a point at or behind the camera has no pixel
     for k in np.argsort(-boxes.box_3d[:, 2], kind="stable"):  # far to near
-        if boxes.cls[k] == DONT_CARE:
+        if boxes.cls[k] == DONT_CARE or (config.min_score is not None
+                                         and boxes.score[k] < config.min_score):
             continue
         inside = points[points_in_box(points, boxes.box_3d[k]) & above & in_front]
         if len(inside) < config.min_box_points:
