@@ -54,7 +54,7 @@ def fill_convex_hull(points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
 
     The points' own pixels are added because sparse LiDAR puts most of an object's points on
     its hull, and about half of those fall in pixels whose centre is just outside it (75 %
-    of a real KITTI car's points were covered by the centre test alone)."""
+    of one real KITTI car's points were covered by the centre test alone)."""
     H, W = shape
     mask = np.zeros(shape, bool)
     hull = convex_hull(points)

@@ -46,9 +46,10 @@ class BoxMaskConfig:
     #: KITTI 0001 unoccluded cars' mask-box IoU 0.84 / 0.81 / 0.78. 0.1 rather than 0.05:
     #: twice the LiDAR's range noise, for roads less flat than these
     hull_ground_clearance_m: float = 0.1
-    #: m, side of a bird's-eye road cell: ~2 LiDAR rings apart at 20 m
+    #: m, side of a bird's-eye road cell: simulator road IoU 0.748 / 0.750 / 0.737 at
+    #: 0.25 / 0.5 / 1 m (finer cells leave gaps between rings, coarser ones spill over kerbs)
     road_cell_m: float = 0.5
-    #: cells of dilation of the road grid (closes ring gaps up to 1 m)
+    #: cells of dilation of the road grid: road IoU 0.741 / 0.750 / 0.740 at 0 / 1 / 2
     road_dilation_cells: int = 1
     #: m, farthest road: beyond, rings are too sparse to mark cells reliably
     road_max_range_m: float = 40.0
