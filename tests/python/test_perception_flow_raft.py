@@ -62,19 +62,6 @@ def test_raft_errors_name_the_problem(tmp_path):
         raft(frame(0, np.zeros((8, 8, 3), np.uint8)), frame(1, np.zeros((8, 16, 3), np.uint8)))
 
 
-def test_tiny_untrained_raft_small_from_a_weight_file(tmp_path):
-    optical_flow = pytest.importorskip("torchvision.models.optical_flow")
-    torch.manual_seed(0)
-    torch.save(optical_flow.raft_small(weights=None).state_dict(), tmp_path / "raft_small.pth")
-    raft = flow_source("raft", None, weights=tmp_path / "raft_small.pth")
-    image = np.random.default_rng(0).integers(0, 256, (45, 70, 3), dtype=np.uint8)
-    flow = raft(frame(0, image), frame(1, image))
-    assert flow.shape == (45, 70, 2) and flow.dtype == np.float32 and np.isfinite(flow).all()
-    torch.save({"not": torch.zeros(1)}, tmp_path / "other.pth")
-    with pytest.raises(ValueError, match=r"other.pth: not a raft_small state dict"):
-        load_raft(tmp_path / "other.pth")
-
-
 def test_without_torchvision_the_error_says_what_to_install(tmp_path):
     try:
         import torchvision  # noqa: F401
