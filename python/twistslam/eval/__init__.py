@@ -50,3 +50,4 @@ def plot_trajectories(*args, **kwargs):
     from .plots import plot_trajectories as _plot
 
     return _plot(*args, **kwargs)
+from .object_tracks import ObjectTrackEvaluation, evaluate_object_tracks, load_ground_truth  # noqa: E402,F401

@@ -1,0 +1,185 @@
+"""Visual object tracks against ground truth: offset / alignment gauge, coverage, ghosts."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from twistslam.eval.object_tracks import (
+    GtTrack, SequenceGroundTruth, estimate_offset, evaluate_object_tracks, evaluated_cars,
+    load_ground_truth,
+)
+from twistslam.objects.result import TrackedObject
+
+FRAMES = 40
+NOISE_M, NOISE_DEG = 0.01, 0.1
+SIM = Path(__file__).resolve().parents[2] / ".cache" / "sim" / "urban-seed0-n100"
+
+
+def pose(yaw_deg=0.0, t=(0, 0, 0), rotvec_deg=None):
+    T = np.eye(4)
+    rv = np.deg2rad(rotvec_deg) if rotvec_deg is not None else [0, np.deg2rad(yaw_deg), 0]
+    T[:3, :3] = Rotation.from_rotvec(rv).as_matrix()
+    T[:3, 3] = t
+    return T
+
+
+def turning_track(x0, z0, speed, yaw_rate_deg, n=FRAMES):
+    """Poses of a car driving along its x axis (camera frame: y down) while turning about y."""
+    poses, T = [], pose(-90.0, (x0, 0.8, z0))  # x along the camera's forward z
+    for _ in range(n):
+        poses.append(T.copy())
+        T = T @ pose(yaw_rate_deg, (speed, 0, 0))
+    return np.stack(poses)
+
+
+def synthetic_gt():
+    T_w_c = np.stack([pose(0.3 * f, (0, 0, 1.0 * f)) for f in range(FRAMES)])
+    frames = np.arange(FRAMES)
+    size = np.array([4.0, 1.7, 1.5])
+    tracks = {
+        1: GtTrack(1, "Car", True, frames, turning_track(2.0, 10.0, 1.3, 1.5), size, np.ones(FRAMES, bool)),
+        2: GtTrack(2, "Car", True, frames, turning_track(-3.0, 20.0, 1.1, -1.0), size, np.ones(FRAMES, bool)),
+        # parked: not evaluated, but an estimate on it is no ghost
+        3: GtTrack(3, "Car", False, frames, np.repeat(pose(-90.0, (-6, 0.8, 15))[None], FRAMES, 0),
+                   size, np.ones(FRAMES, bool)),
+        # seen in too few frames to be evaluated
+        4: GtTrack(4, "Car", True, frames, turning_track(6.0, 12.0, 1.0, 0.0), size, frames < 10),
+    }
+    return SequenceGroundTruth(T_w_c=T_w_c, tracks=tracks)
+
+
+def tracked(track_id, frames, T_w_o):
+    n = len(frames)
+    return TrackedObject(track_id=track_id, cls="Car", state="confirmed", link="planar",
+                         frames=np.asarray(frames), T_w_o=T_w_o, size=np.ones(3),
+                         velocity_kmh=np.zeros(n), detected=np.ones(n, bool),
+                         reported=np.ones(n, bool), score=np.ones(n), mean_score=1.0)
+
+
+def noisy(T, rng, noise_m=NOISE_M, noise_deg=NOISE_DEG):
+    out = T.copy()
+    for k in range(len(T)):
+        out[k] = out[k] @ pose(rotvec_deg=rng.normal(0, noise_deg, 3), t=rng.normal(0, noise_m, 3))
+    return out
+
+
+@pytest.fixture
+def world():
+    """GT, a global transform A (drifting SLAM world) and the estimated camera A T_w_c."""
+    gt = synthetic_gt()
+    A = pose(rotvec_deg=(2.0, 25.0, -3.0), t=(5.0, -1.0, 3.0))
+    return gt, A, A @ gt.T_w_c
+
+
+def estimate_of(gt, A, tid, offset, rng, frames=None):
+    track = gt.tracks[tid]
+    keep = np.isin(track.frames, frames) if frames is not None else np.ones(len(track.frames), bool)
+    return tracked(tid * 10, track.frames[keep], noisy(A @ track.T_w_o[keep] @ offset, rng))
+
+
+OFFSET = pose(rotvec_deg=(0, 40.0, 0), t=(0.4, 0.2, -0.3))  # identity-at-centroid look-alike
+
+
+def test_selection_keeps_moving_cars_seen_often_enough():
+    gt = synthetic_gt()
+    assert sorted(evaluated_cars(gt)) == [1, 2]
+    assert sorted(evaluated_cars(gt, max_range_m=15.0)) == []  # car 2 too far, car 1 leaves
+
+
+def test_offset_and_global_transform_leave_noise_level_errors(world):
+    gt, A, cams = world
+    rng = np.random.default_rng(0)
+    est = [estimate_of(gt, A, tid, OFFSET, rng) for tid in (1, 2)]
+    ev = evaluate_object_tracks(est, cams, gt)
+    assert [c.gt_id for c in ev.cars] == [1, 2]
+    for car in ev.cars:
+        assert car.coverage == 1.0 and car.n_compared == FRAMES and car.est_ids == [car.gt_id * 10]
+        assert car.rpe_t < 0.05 and car.rpe_r < 0.3 and car.ate_aligned < 0.03
+        np.testing.assert_allclose(car.offset, OFFSET, atol=0.02)
+    assert ev.n_tracked == 2 and ev.n_ghosts == 0
+    assert "mean" in ev.format_table()
+
+
+def test_wrong_offset_changes_only_canonical_metrics(world):
+    gt, _, _ = world
+    A = np.eye(4)  # canonical metrics need the SLAM world to be the ground-truth world
+    right = evaluate_object_tracks([estimate_of(gt, A, 1, np.eye(4), np.random.default_rng(1))],
+                                   gt.T_w_c, gt)
+    wrong = evaluate_object_tracks([estimate_of(gt, A, 1, OFFSET, np.random.default_rng(1))],
+                                   gt.T_w_c, gt)
+    r, w = right.cars[0], wrong.cars[0]
+    assert r.rpe_t == pytest.approx(w.rpe_t, rel=0.1) and r.ate_aligned == pytest.approx(w.ate_aligned, rel=0.1)
+    assert r.rpe_r == pytest.approx(w.rpe_r, rel=0.1)
+    assert r.ate_canonical < 0.03 < 0.3 < w.ate_canonical
+    assert w.rpe_t_canonical > 3 * r.rpe_t_canonical
+
+
+def test_dropped_frames_lower_coverage_and_split_tracks_share_it(world):
+    gt, A, cams = world
+    rng = np.random.default_rng(2)
+    sparse = estimate_of(gt, A, 1, OFFSET, rng, frames=np.arange(0, FRAMES, 2))
+    first = estimate_of(gt, A, 2, OFFSET, rng, frames=np.arange(0, 15))
+    second = estimate_of(gt, A, 2, OFFSET, rng, frames=np.arange(15, FRAMES))
+    second.track_id = 99
+    ev = evaluate_object_tracks([sparse, first, second], cams, gt)
+    car1, car2 = ev.cars
+    assert car1.coverage == pytest.approx(0.5) and car1.n_compared == FRAMES // 2
+    assert car1.ate_aligned < 0.03  # a gap is a longer RPE step, not an error
+    assert car2.coverage == 1.0 and car2.est_ids == [99, 20]  # main (most hits) first
+    assert car2.n_compared == FRAMES - 15
+    assert ev.n_tracked == 1
+
+
+def test_random_tracks_are_ghosts_unless_short_or_on_a_parked_car(world):
+    gt, A, cams = world
+    rng = np.random.default_rng(3)
+    far = np.stack([A @ pose(t=(rng.uniform(20, 30), 0, f + 10.0)) for f in range(10)])
+    short = far[:GHOST_SHORT]
+    parked = estimate_of(gt, A, 3, OFFSET, rng, frames=np.arange(5, 25))
+    est = [tracked(7, np.arange(10), far), tracked(8, np.arange(GHOST_SHORT), short), parked]
+    ev = evaluate_object_tracks(est, cams, gt)
+    assert ev.ghost_ids == [7]
+    assert all(c.coverage == 0 and np.isnan(c.rpe_t) for c in ev.cars)
+
+
+GHOST_SHORT = 4  # one frame short of a ghost
+
+
+def test_lost_camera_frames_are_skipped(world):
+    gt, A, cams = world
+    cams = cams.copy()
+    cams[10:12] = np.nan
+    ev = evaluate_object_tracks([estimate_of(gt, A, 1, OFFSET, np.random.default_rng(4))], cams, gt)
+    assert ev.cars[0].n_compared == FRAMES - 2 and ev.cars[0].coverage == pytest.approx(38 / 40)
+
+
+def test_offset_mean_ignores_an_outlier():
+    T_gt = turning_track(0, 10, 1.0, 2.0, n=20)
+    T_est = T_gt @ OFFSET
+    T_est[5] = T_est[5] @ pose(rotvec_deg=(0, 60, 0), t=(3, 0, 0))
+    np.testing.assert_allclose(estimate_offset(T_gt, T_est), OFFSET, atol=1e-9)
+
+
+@pytest.mark.skipif(not (SIM / "training").is_dir(), reason="no cached simulation (make demo)")
+def test_noisy_ground_truth_of_a_simulated_sequence():
+    gt = load_ground_truth(SIM, "0000")
+    rng = np.random.default_rng(5)
+    est = []
+    for tid, track in gt.tracks.items():
+        seen = track.labelled
+        est.append(tracked(tid, track.frames[seen], noisy(track.T_w_o[seen] @ OFFSET, rng)))
+    ev = evaluate_object_tracks(est, gt.T_w_c, gt)
+    assert len(ev.cars) >= 1 and ev.n_ghosts == 0
+    assert ev.n_tracked == len(ev.cars) and ev.ate_aligned < 0.03
+
+
+def test_a_waiting_moving_car_has_ate_but_no_rpe_per_metre(world):
+    gt, A, cams = world
+    car = gt.tracks[1]
+    car.T_w_o = np.repeat(car.T_w_o[:1], FRAMES, 0)  # "moving" in the scene, waiting here
+    ev = evaluate_object_tracks([estimate_of(gt, A, 1, OFFSET, np.random.default_rng(6))], cams, gt)
+    row = ev.cars[0]
+    assert row.path_m < 1e-9 and np.isnan(row.rpe_t) and np.isnan(row.rpe_r)
+    assert row.coverage == 1.0 and row.ate_aligned < 0.03
