@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "optim/dynamic_reprojection_cost.hpp"
 #include "optim/object_costs.hpp"
 #include "optim/pose_parameterization.hpp"
 #include "optim/reprojection_costs.hpp"
@@ -140,6 +141,15 @@ ceres::ResidualBlockId ProblemBuilder::add_link(int pose_a, int pose_b, const Ma
                                                 double sigma_t, double sigma_r) {
   return problem_->AddResidualBlock(make_link_cost(Pi, sigma_t, sigma_r), nullptr,
                                     blocks_[pose_a].data, blocks_[pose_b].data);
+}
+
+ceres::ResidualBlockId ProblemBuilder::add_dynamic_reprojection(
+    int camera_pose, int object_pose, int object_point, const geometry::StereoCamera& cam,
+    const Vec2& uv, double u_right, double inv_sigma2, double huber_delta, double min_depth) {
+  return problem_->AddResidualBlock(
+      make_dynamic_reprojection_cost(&cam, uv, u_right, inv_sigma2, min_depth),
+      huber(huber_delta), blocks_[camera_pose].data, blocks_[object_pose].data,
+      blocks_[object_point].data);
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_residual(ceres::CostFunction* cost,

@@ -113,6 +113,19 @@ class ProblemBuilder {
   ceres::ResidualBlockId add_link(int pose_a, int pose_b, const Mat6& Pi, double sigma_t,
                                   double sigma_r);
 
+  // e_dyna (dynamic_reprojection_cost.hpp): stereo (u_right >= 0) or mono reprojection of
+  // the object-frame point block `object_point` (X_o) through the object pose block
+  // `object_pose` (T_w_o, as the object window stores it) and the camera pose block
+  // `camera_pose` (T_c_w, as the BA stores keyframes): X_c = T_c_w T_w_o X_o. Both poses in
+  // one world frame. Weighting, Huber, min_depth and gating exactly as e_stat; `cam` must
+  // outlive the builder.
+  ceres::ResidualBlockId add_dynamic_reprojection(int camera_pose, int object_pose,
+                                                  int object_point,
+                                                  const geometry::StereoCamera& cam,
+                                                  const Vec2& uv, double u_right,
+                                                  double inv_sigma2, double huber_delta,
+                                                  double min_depth);
+
   // Any other residual family: takes ownership of `cost`; `loss` from huber() (or owned
   // elsewhere, never taken over).
   ceres::ResidualBlockId add_residual(ceres::CostFunction* cost, ceres::LossFunction* loss,
