@@ -129,7 +129,9 @@ def _run_run(args: argparse.Namespace) -> int:
         return _run_objects(args, config, sequence)
     from .pipeline import run
 
-    result = run(sequence, config, progress=not args.no_progress)
+    result = run(sequence, config, progress=not args.no_progress,
+                 segmentation=args.segmentation, flow=args.flow, viz=args.viz,
+                 viz_save=args.viz_save)
     paths = result.save(args.out)
     t = result.timings.summary()
     print(f"{result.seq or args.root}: {len(result)} frames, {t['hz']:.1f} Hz "
@@ -183,6 +185,19 @@ def _add_run(sub: argparse._SubParsersAction) -> None:
                    "writes OUT/tracking/SEQ.txt (objects tracked from the detections alone)")
     p.add_argument("--no-images", action="store_true",
                    help="do not run the stereo SLAM (objects from --detections only)")
+    p.add_argument("--segmentation", default="auto", choices=["auto", "files", "boxes", "none"],
+                   help="panoptic segmentation source: files (the sequence's panoptic PNGs), "
+                   "boxes (masks from 3D detections), none; auto: files when the sequence "
+                   "has them, else boxes (default: auto)")
+    p.add_argument("--flow", default="auto", choices=["auto", "files", "dis", "raft", "none"],
+                   help="optical flow source: files (the sequence's flow files), dis (OpenCV "
+                   "DIS), raft (torchvision RAFT, needs weights), none; auto: files when the "
+                   "sequence has them, else dis (default: auto)")
+    p.add_argument("--viz", action="store_true",
+                   help="live view: spawn a rerun viewer (needs pip install 'twistslam[viz]')")
+    p.add_argument("--viz-save", metavar="FILE.rrd", type=Path, default=None,
+                   help="write the rerun recording to FILE.rrd, no viewer needed "
+                   "(needs pip install 'twistslam[viz]')")
     p.set_defaults(handler=_run_run)
 
 

@@ -1,0 +1,10 @@
+"""Live view of a run in rerun (optional extra: ``pip install 'twistslam[viz]'``).
+
+``import twistslam.viz`` works without rerun; creating a :class:`RerunLogger` needs it.
+"""
+
+from .colors import CITYSCAPES_COLORS, track_color
+from .logger import RerunLogger
+from .views import ObjectView
+
+__all__ = ["CITYSCAPES_COLORS", "ObjectView", "RerunLogger", "track_color"]
