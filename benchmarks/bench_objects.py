@@ -1,0 +1,219 @@
+"""Ablation of the visual object tracking (issue 10) on simulated sequences.
+
+    .venv/bin/python benchmarks/bench_objects.py [--scenarios urban crowded] [--seeds 0]
+        [--frames 100] [--rows default dis ...] [--set section.key=value ...] [--per-car]
+        [--gt-as-estimate]
+
+Rows (each a ``twistslam.run(seq, config=cfg, progress=False, segmentation=SEG, flow=FLOW)``
+on the simulator's sequence, ``.cache/sim/SCENARIO-seedS-nF``, generated when missing):
+
+* ``default``: panoptic and flow from the simulator's files, planar link for vehicles;
+* ``free-link``: ``visual_objects.planar_class_ids = []`` (every link free; the planar link
+  must lower RPE_r);
+* ``no-const``: ``visual_objects.use_const = False`` (no e_const in the BA);
+* ``dis``: OpenCV DIS flow instead of the flow files;
+* ``boxes-seg``: instance masks from the oracle detections instead of the panoptic files;
+* ``kp-only`` / ``kp-extra``: ``visual_objects.extra_keypoints`` False / True.
+
+Per row: mean object RPE_t (m/m), RPE_r (deg/m) and aligned ATE (m) over the moving cars
+seen 20+ frames within 50 m (:mod:`twistslam.eval.object_tracks`), cars tracked in >= 90 %
+of those frames, ghost tracks, camera ATE (m, aligned) and RPE (m/frame, deg/frame) against
+``poses/SEQ.txt``, median ms per object per frame of every timing stage named ``object*``,
+median flow ms, and the loop's Hz. A row whose config key or run argument does not exist
+yet prints "not available" and the reason.
+
+``--gt-as-estimate`` skips the SLAM: the camera poses are the ground truth and
+``result.objects`` the ground-truth tracks of every object in its labelled frames, with an
+identity-rotation-at-centroid-like object frame and per-frame noise (``GT_NOISE_*``), to run
+the evaluation end to end before the tracker exists (a row whose config is not available
+is then still evaluated, after a note).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+import twistslam
+from twistslam.datasets import read_poses
+from twistslam.demo import MOVABLE_CLASSES, cached_sequence
+from twistslam.eval import evaluate_camera
+from twistslam.eval.object_tracks import evaluate_object_tracks, load_ground_truth
+from twistslam.objects.result import TrackedObject
+from twistslam.timings import Timings
+
+SEQ = "0000"
+CACHE = Path(__file__).resolve().parents[1] / ".cache" / "sim"
+#: per-frame noise of the --gt-as-estimate objects (m, deg): a good visual tracker's level
+GT_NOISE_M, GT_NOISE_DEG = 0.02, 0.2
+#: centroid offset of the --gt-as-estimate object frames (m): points lie on the visible side
+GT_CENTROID_OFFSET_M = 0.5
+
+
+@dataclass
+class Row:
+    """One ablation: config overrides (nested sections) and the perception sources."""
+
+    name: str
+    overrides: dict = field(default_factory=dict)
+    segmentation: str = "files"
+    flow: str = "files"
+
+
+#: config section of the visual object tracking (python/twistslam/config_visual_objects.py)
+SECTION = "visual_objects"
+
+ROWS = {r.name: r for r in [
+    Row("default"),
+    Row("free-link", {SECTION: {"planar_class_ids": []}}),
+    Row("no-const", {SECTION: {"use_const": False}}),
+    Row("dis", flow="dis"),
+    Row("boxes-seg", segmentation="boxes"),
+    Row("kp-only", {SECTION: {"extra_keypoints": False}}),
+    Row("kp-extra", {SECTION: {"extra_keypoints": True}}),
+]}
+
+
+class NotAvailable(Exception):
+    """A config key or run argument this row needs does not exist (yet)."""
+
+
+def build_config(row: Row, extra: list[str]) -> twistslam.Config:
+    """Defaults + the demo's dynamic classes + the row's overrides + ``--set`` items."""
+    data = {"tracking": {"dynamic_class_ids": list(MOVABLE_CLASSES)}}
+    for section, values in row.overrides.items():
+        data.setdefault(section, {}).update(values)
+    try:
+        return twistslam.Config.from_dict(data).override(extra)
+    except ValueError as exc:
+        raise NotAvailable(f"config: {exc}") from None
+
+
+def run_slam(root: Path, row: Row, config) -> object:
+    try:
+        return twistslam.run((root, SEQ), config=config, progress=False,
+                             segmentation=row.segmentation, flow=row.flow)
+    except TypeError as exc:  # the perception arguments are being added (issue 10)
+        if "segmentation" in str(exc) or "flow" in str(exc):
+            raise NotAvailable(f"twistslam.run: {exc}") from None
+        raise
+
+
+@dataclass
+class FakeResult:
+    """The parts of a :class:`twistslam.Result` this bench reads."""
+
+    camera_poses: np.ndarray
+    objects: list
+    timings: Timings = field(default_factory=Timings)
+
+
+def gt_as_estimate(gt, rng: np.random.Generator) -> FakeResult:
+    """Ground truth as a tracker's output: offset object frames and per-frame noise."""
+    objects = []
+    for tid, track in sorted(gt.tracks.items()):
+        seen = np.flatnonzero(track.labelled)
+        if not len(seen):
+            continue
+        T_off = np.eye(4)  # world axes at a point near the box centre, as a new cluster
+        T_off[:3, :3] = track.T_w_o[seen[0], :3, :3].T
+        T_off[:3, 3] = rng.uniform(-GT_CENTROID_OFFSET_M, GT_CENTROID_OFFSET_M, 3)
+        poses = track.T_w_o[seen] @ T_off
+        for k in range(len(poses)):
+            noise = np.eye(4)
+            noise[:3, :3] = Rotation.from_rotvec(np.deg2rad(rng.normal(0, GT_NOISE_DEG, 3))).as_matrix()
+            noise[:3, 3] = rng.normal(0, GT_NOISE_M, 3)
+            poses[k] = poses[k] @ noise
+        n = len(seen)
+        objects.append(TrackedObject(
+            track_id=tid, cls=track.cls, state="confirmed", link="planar",
+            frames=track.frames[seen], T_w_o=poses, size=track.size.copy(),
+            velocity_kmh=np.zeros(n), detected=np.ones(n, bool), reported=np.ones(n, bool),
+            score=np.ones(n), mean_score=1.0))
+    return FakeResult(camera_poses=gt.T_w_c.copy(), objects=objects)
+
+
+def per_object_ms(result) -> dict[str, float]:
+    """Median over frames of each ``object*`` stage's ms divided by the live tracks."""
+    n_frames = len(result.camera_poses)
+    live = np.zeros(n_frames)
+    for obj in result.objects:
+        f = np.asarray(obj.frames)
+        live[f[(f >= 0) & (f < n_frames)]] += 1
+    out = {}
+    for name, ms in result.timings.stages.items():
+        if "object" in name and len(ms) == n_frames:
+            ok = np.isfinite(ms) & (live > 0)
+            out[name] = float(np.median(ms[ok] / live[ok])) if ok.any() else float("nan")
+    return out
+
+
+def median_stage(result, word: str) -> float:
+    values = [ms for name, ms in result.timings.stages.items() if word in name]
+    finite = np.concatenate(values)[np.isfinite(np.concatenate(values))] if values else []
+    return float(np.median(finite)) if len(finite) else float("nan")
+
+
+HEADER = (f"{'scenario':<14} {'row':<10} {'RPE_t':>6} {'RPE_r':>6} {'ATE_al':>6} "
+          f"{'tracked':>8} {'ghosts':>6} {'camATE':>7} {'camRPEt':>8} {'camRPEr':>8} "
+          f"{'flow ms':>7} {'Hz':>6}  object ms/obj/frame")
+
+
+def format_row(label: str, name: str, ev, cam, result) -> str:
+    obj_ms = ", ".join(f"{k} {v:.2f}" for k, v in per_object_ms(result).items()) or "-"
+    return (f"{label:<14} {name:<10} {ev.rpe_t:>6.3f} {ev.rpe_r:>6.3f} {ev.ate_aligned:>6.3f} "
+            f"{f'{ev.n_tracked}/{len(ev.cars)}':>8} {ev.n_ghosts:>6} {cam.ate_rmse:>7.3f} "
+            f"{cam.rpe_t_mean:>8.4f} {cam.rpe_r_mean:>8.4f} {median_stage(result, 'flow'):>7.1f} "
+            f"{result.timings.hz:>6.1f}  {obj_ms}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--scenarios", nargs="+", default=["urban", "crowded"])
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0])
+    parser.add_argument("--frames", type=int, default=100)
+    parser.add_argument("--rows", nargs="+", default=list(ROWS), choices=list(ROWS))
+    parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                        help="extra config override for every row")
+    parser.add_argument("--cache", type=Path, default=CACHE)
+    parser.add_argument("--per-car", action="store_true", help="print each row's per-car table")
+    parser.add_argument("--gt-as-estimate", action="store_true",
+                        help="debug: noisy ground truth instead of a SLAM run")
+    args = parser.parse_args(argv)
+
+    print(f"RPE_t m/m, RPE_r deg/m, ATE_al m (means over moving cars); camera ATE m, RPE m and "
+          f"deg per frame{'; GROUND TRUTH AS ESTIMATE (debug)' if args.gt_as_estimate else ''}")
+    print(HEADER)
+    for scenario in args.scenarios:
+        for seed in args.seeds:
+            root = cached_sequence(args.cache, scenario=scenario, frames=args.frames, seed=seed,
+                                   progress=False)
+            gt = load_ground_truth(root, SEQ)
+            gt_cam = read_poses(root / "training" / "poses" / f"{SEQ}.txt")
+            label = f"{scenario}-s{seed}"
+            for name in args.rows:
+                row = ROWS[name]
+                try:
+                    config = build_config(row, args.set)
+                    result = None if args.gt_as_estimate else run_slam(root, row, config)
+                except NotAvailable as exc:
+                    print(f"{label:<14} {name:<10} not available: {str(exc).split(';')[0]}")
+                    if not args.gt_as_estimate:
+                        continue
+                if args.gt_as_estimate:  # the config does not matter here
+                    result = gt_as_estimate(gt, np.random.default_rng(seed))
+                ev = evaluate_object_tracks(result.objects, result.camera_poses, gt)
+                cam = evaluate_camera(gt_cam, result.camera_poses)
+                print(format_row(label, name, ev, cam, result), flush=True)
+                if args.per_car:
+                    print(ev.format_table())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
