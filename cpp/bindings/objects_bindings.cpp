@@ -1,10 +1,13 @@
 // Bindings of cpp/objects: the 3D multi-object tracker from detections and the assignment.
 #include <pybind11/stl.h>
 
+#include <cmath>
+
 #include "bindings/numpy_checks.hpp"
 #include "bindings/options_table.hpp"
 #include "objects/assignment.hpp"
 #include "objects/tracker.hpp"
+#include "objects/twist_estimation.hpp"
 
 namespace twistslam::bindings {
 using namespace pybind11::literals;
@@ -97,7 +100,10 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
 
 }  // namespace
 
+void bind_object_twist(py::module_& m);  // estimate_object_twist, at the end
+
 void bind_objects(py::module_& m) {
+  bind_object_twist(m);
   m.def("default_tracker_options", [] { o::TrackerOptions t; return dump_section(tracker_fields(t)); },
         "The C++ defaults of every tracker option, {key: value} as Tracker() takes them.");
   m.def("solve_assignment",
@@ -205,6 +211,119 @@ the camera), ``frame_confidence`` (range-corrected score), ``detected_size``,
 ``detection_index``.)doc")
       .def_property_readonly("num_live", &o::Tracker::num_live, "Tracks not dead.")
       .def_property_readonly("last_frame", &o::Tracker::last_frame, "Last frame stepped (-1: none).");
+}
+
+}  // namespace twistslam::bindings
+
+// ---- Object twist estimation (paper eq. 4, cpp/objects/twist_estimation.hpp) ----
+namespace twistslam::bindings {
+namespace {
+
+FieldTable twist_estimation_fields(objects::TwistEstimationOptions& t) {
+  return {{"max_iterations", set(&t.max_iterations, 1, 1000)},
+          {"refine_iterations", set(&t.refine_iterations, 0, 1000)},
+          {"huber_k", set(&t.huber_k, 1e-6, 1e6)}, {"min_sigma_px", set(&t.min_sigma_px, 1e-6, 1e6)},
+          {"max_sigma_px", set(&t.max_sigma_px, 1e-6, 1e6)},
+          {"inlier_chi2_stereo", set(&t.inlier_chi2_stereo, 1e-6, 1e6)},
+          {"inlier_chi2_mono", set(&t.inlier_chi2_mono, 1e-6, 1e6)},
+          {"min_inliers", set(&t.min_inliers, 1, 1e9)}, {"min_depth", set(&t.min_depth, 1e-9, 1e6)},
+          {"initial_lambda", set(&t.initial_lambda, 1e-12, 1e12)},
+          {"step_tolerance", set(&t.step_tolerance, 0, 1)}};
+}
+
+// (N,) float64 vector or, for None, N copies of `fill`.
+std::vector<double> optional_column(const py::object& obj, const char* name, py::ssize_t n, double fill) {
+  if (obj.is_none()) return std::vector<double>(n, fill);
+  const DoubleArray a = as_double_array(obj, name);
+  if (a.ndim() != 1 || a.shape(0) != n)
+    throw py::value_error(std::string(name) + ": expected shape (" + std::to_string(n) + ",), got " + shape_string(a));
+  return std::vector<double>(a.data(), a.data() + n);
+}
+
+}  // namespace
+
+void bind_object_twist(py::module_& m) {
+  m.def("default_twist_estimation_options",
+        [] { objects::TwistEstimationOptions t; return dump_section(twist_estimation_fields(t)); },
+        "The C++ defaults of estimate_object_twist's keyword options.");
+  m.def("estimate_object_twist",
+        [](const geometry::StereoCamera& camera, py::handle T_c_w, py::handle T_w_o_prev, py::handle Pi,
+           py::handle points_o, py::handle uv, const py::object& u_right, const py::object& inv_sigma2,
+           const py::object& xi_init, const py::kwargs& kwargs) {
+          objects::TwistEstimationOptions opt;
+          apply_keywords(kwargs, "estimate_object_twist", twist_estimation_fields(opt));
+          const Mat4 Tcw = as_rigid_transform(T_c_w, "T_c_w"), Two = as_rigid_transform(T_w_o_prev, "T_w_o_prev");
+          const Mat6 P = as_mat6(Pi, "Pi");
+          const Vec6 xi0 = xi_init.is_none() ? Vec6::Zero() : as_vec6(xi_init, "xi_init");
+          const DoubleArray X = as_rows(points_o, "points_o", 3), z = as_rows(uv, "uv", 2);
+          const py::ssize_t n = X.shape(0);
+          if (z.shape(0) != n)
+            throw py::value_error("uv: expected " + std::to_string(n) + " rows like points_o, got " + shape_string(z));
+          const auto ur = optional_column(u_right, "u_right", n, -1.0);
+          const auto w = optional_column(inv_sigma2, "inv_sigma2", n, 1.0);
+          std::vector<objects::TwistObservation> obs(n);
+          for (py::ssize_t j = 0; j < n; ++j) {
+            obs[j].X_o = Vec3(X.data()[3 * j], X.data()[3 * j + 1], X.data()[3 * j + 2]);
+            obs[j].uv = Vec2(z.data()[2 * j], z.data()[2 * j + 1]);
+            obs[j].u_right = std::isnan(ur[j]) ? -1.0 : ur[j];  // NaN = unmatched in match_stereo
+            obs[j].inv_sigma2 = w[j];
+          }
+          objects::TwistEstimate e;
+          {
+            py::gil_scoped_release release;
+            e = objects::estimate_object_twist(camera, Tcw, Two, P, obs, xi0, opt);
+          }
+          py::array_t<bool> inlier(n);
+          for (py::ssize_t j = 0; j < n; ++j) inlier.mutable_data()[j] = e.inlier[j];
+          return py::dict("valid"_a = e.valid, "failure"_a = e.failure, "xi"_a = to_numpy(e.xi),
+                          "T_w_o"_a = to_numpy(e.T_w_o), "covariance"_a = to_numpy(e.covariance),
+                          "sigma_px"_a = e.sigma_px, "inlier"_a = inlier, "num_inliers"_a = e.num_inliers,
+                          "iterations"_a = e.iterations, "final_rms_px"_a = e.final_rms_px);
+        },
+        "camera"_a, "T_c_w"_a, "T_w_o_prev"_a, "Pi"_a, "points_o"_a, "uv"_a, "u_right"_a = py::none(),
+        "inv_sigma2"_a = py::none(), "xi_init"_a = py::none(),
+        R"doc(Twist of one object between two frames from its keypoints (TwistSLAM eq. 4).
+
+Minimises sum_j rho(|z_j - proj(T_c_w exp(Pi xi) T_w_o_prev X_o_j)|) by Levenberg-Marquardt
+inside range(Pi), Huber rho with a MAD-based scale, then re-solves on the chi2 inliers.
+
+Parameters
+----------
+camera : twistslam.geometry.StereoCamera
+    The rectified pair; its ``disparity_offset`` is part of the stereo measurement.
+T_c_w : (4, 4) array_like
+    Current camera pose (world to camera).
+T_w_o_prev : (4, 4) array_like
+    Object pose at the previous frame.
+Pi : (6, 6) array_like
+    Link projector (``projector_planar(n)`` / identity); twists are [v; w].
+points_o : (N, 3) array_like
+    Object points in the object frame, m.
+uv : (N, 2) array_like
+    Their keypoints in the current left image, px.
+u_right : (N,) array_like, optional
+    Right-image columns, px; negative or NaN for a mono observation. None: all mono.
+inv_sigma2 : (N,) array_like, optional
+    1 / sigma^2 of each keypoint's pyramid level. None: all 1.
+xi_init : (6,) array_like, optional
+    Initial twist (projected onto range(Pi)). None: zero.
+**options
+    Keys of ``default_twist_estimation_options()``.
+
+Returns
+-------
+dict
+    ``valid``, ``failure`` (why not valid), ``xi`` (6,), ``T_w_o`` (4, 4) = exp(xi) T_w_o_prev,
+    ``covariance`` (6, 6) of xi, ``sigma_px``, ``inlier`` (N,) bool, ``num_inliers``,
+    ``iterations``, ``final_rms_px``.
+
+Raises
+------
+ValueError
+    Wrong shapes, non-finite poses or Pi, a pose that is not rigid, an option out of range.
+TypeError
+    An unknown option or one of the wrong type.
+)doc");
 }
 
 }  // namespace twistslam::bindings
