@@ -37,7 +37,7 @@ apt:
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PIP) install -q "torch==$(TORCH_VERSION)"
 	$(PIP) install -q scikit-build-core "pybind11>=2.12" "cmake>=3.22" ninja numpy
-	$(PIP) install -q --no-build-isolation -e ".[dev,models]"
+	$(PIP) install -q --no-build-isolation -e ".[dev,models,viz]"
 	@# independent reference implementations the evaluator's tests compare against (TrackEval's
 	@# HOTA, AB3DMOT's evaluator for sAMOTA / the devkit rules); --no-deps: their pins would
 	@# downgrade numpy and pull opencv / pycocotools, none of which the tested code paths need

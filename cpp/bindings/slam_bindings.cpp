@@ -4,6 +4,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include "bindings/numpy_checks.hpp"
+#include "bindings/object_track_dict.hpp"
 #include "bindings/slam_options.hpp"
 #include "tracking/system.hpp"
 
@@ -28,13 +29,45 @@ cv::Mat image_view(const py::array& a, const char* name, bool labels) {
   return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), type, const_cast<void*>(a.data()));
 }
 
+// Zero-copy CV_32FC2 view of a C-contiguous float32 (H, W, 2) flow field.
+cv::Mat flow_view(const py::array& a) {
+  if (!py::isinstance<py::array_t<float>>(a) || a.ndim() != 3 || a.shape(2) != 2)
+    throw py::value_error("flow: expected float32 (H, W, 2), got " + std::string(py::str(a.dtype())) +
+                          " " + shape_string(a));
+  if (!(a.flags() & py::array::c_style)) throw py::value_error("flow: array must be C-contiguous");
+  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), CV_32FC2,
+                 const_cast<void*>(a.data()));
+}
+
+// Every object cluster: its track (object_track_dict.hpp) plus its points in the object frame.
+py::list objects_to_list(const t::ObjectTracker& tracker) {
+  py::list out;
+  for (size_t c = 0; c < tracker.tracks().size(); ++c) {
+    py::dict d = track_to_dict(tracker.tracks()[c]);
+    const auto& pts = tracker.clusters()[c].points;
+    DoubleArray X = new_array({static_cast<py::ssize_t>(pts.size()), 3});
+    py::array_t<std::int64_t> found(static_cast<py::ssize_t>(pts.size()));
+    for (size_t i = 0; i < pts.size(); ++i) {
+      for (int k = 0; k < 3; ++k) X.mutable_data()[3 * i + k] = pts[i].X_o[k];
+      found.mutable_data()[i] = pts[i].found;
+    }
+    d["points_o"] = X;
+    d["point_found"] = found;
+    out.append(d);
+  }
+  return out;
+}
+
 py::dict to_dict(const t::TrackResult& r) {
   py::dict timings;
   for (const auto& [stage, ms] : r.timings_ms) timings[py::str(stage)] = ms;
   return py::dict("status"_a = t::to_string(r.status), "T_w_c"_a = to_numpy(r.T_w_c),
                   "is_keyframe"_a = r.is_keyframe, "num_inliers"_a = r.num_inliers,
                   "num_map_points"_a = r.num_map_points, "num_keyframes"_a = r.num_keyframes,
-                  "num_lidar_depth"_a = r.num_lidar_depth, "timings_ms"_a = timings);
+                  "num_lidar_depth"_a = r.num_lidar_depth, "timings_ms"_a = timings,
+                  "num_objects_tracked"_a = r.objects.num_tracked,
+                  "num_objects_new"_a = r.objects.num_new,
+                  "num_object_points"_a = r.objects.num_points);
 }
 
 }  // namespace
@@ -59,7 +92,8 @@ options : dict
 )doc")
       .def("track",
            [](t::System& s, int index, double timestamp, const py::array& left, const py::array& right,
-              const py::object& labels, const py::object& points_c) {
+              const py::object& labels, const py::object& points_c, const py::object& instances,
+              const py::object& flow) {
              const cv::Mat l = image_view(left, "image_left", false);
              Points3 scan;
              if (!points_c.is_none()) scan = points_view(as_rows(points_c, "points_c", 3));
@@ -70,11 +104,21 @@ options : dict
                label_array = py::array::ensure(labels);
                lab = image_view(label_array, "labels", true);
              }
+             py::array instance_array, flow_array;
+             cv::Mat inst, flo;
+             if (!instances.is_none()) {
+               instance_array = py::array::ensure(instances);
+               inst = image_view(instance_array, "instances", true);
+             }
+             if (!flow.is_none()) {
+               flow_array = py::array::ensure(flow);
+               flo = flow_view(flow_array);
+             }
              t::TrackResult result;
              {
                py::gil_scoped_release release;
                try {
-                 result = s.track(index, timestamp, l, r, lab, scan);
+                 result = s.track(index, timestamp, l, r, lab, scan, inst, flo);
                } catch (const std::invalid_argument& e) {
                  py::gil_scoped_acquire acquire;
                  throw py::value_error("frame " + std::to_string(index) + ": " + e.what());
@@ -83,7 +127,7 @@ options : dict
              return to_dict(result);
            },
            "index"_a, "timestamp"_a, "image_left"_a, "image_right"_a, "labels"_a = py::none(),
-           "points_c"_a = py::none(),
+           "points_c"_a = py::none(), "instances"_a = py::none(), "flow"_a = py::none(),
            R"doc(Track one stereo frame.
 
 Parameters
@@ -100,14 +144,26 @@ points_c : ndarray (N, 3) float, optional
     The frame's LiDAR scan in the rectified reference camera frame c. With
     ``lidar.use_depth`` keypoints near its returns take their depth from it (returns on
     dynamic classes are dropped; non-finite points are skipped). None or (0, 3): stereo only.
+instances : ndarray of int32 (H, W), optional
+    Panoptic instance id per pixel (0: none); instances of ``visual_objects.object_class_ids``
+    (by ``labels``) become object clusters tracked by eq. 4.
+flow : ndarray of float32 (H, W, 2), optional
+    Optical flow (u, v) px from the previous frame's left image to this one, NaN where
+    unknown: the search of object tracking starts at the flow-predicted position.
 
 Returns
 -------
 dict
     status ("initialized", "ok", "lost", "relocalized"), T_w_c (4, 4), is_keyframe,
     num_inliers, num_map_points, num_keyframes, num_lidar_depth (keypoints with a LiDAR
-    depth), timings_ms {stage: ms}.
+    depth), timings_ms {stage: ms}, num_objects_tracked, num_objects_new,
+    num_object_points (matched inlier points of all clusters).
 )doc")
+      .def("objects", [](const t::System& s) { return objects_to_list(s.objects()); },
+           R"doc(Every object cluster ever started, as dicts: the track's fields (id, class_id,
+state, link, frames, T_w_o (K, 4, 4) in the world frame, twist (K, 6), detected = a valid twist
+was estimated that frame, ...) and ``points_o`` (M, 3) its points in the object frame,
+``point_found`` (M,) the frames each was matched in.)doc")
       .def("trajectory",
            [](const t::System& s) {
              const auto traj = s.trajectory();

@@ -9,6 +9,7 @@
 #include "features/stereo.hpp"
 #include "features/stereo_option_ranges.hpp"
 #include "tracking/lidar_keypoint_depth.hpp"
+#include "tracking/object_tracking_options.hpp"
 
 namespace twistslam::tracking {
 
@@ -66,6 +67,7 @@ struct SlamOptions {
   LocalBAOptions local_ba;
   MapOptions map;
   LidarOptions lidar;  // keypoint depth from a frame's scan (tracking/lidar_keypoint_depth.hpp)
+  ObjectTrackingOptions visual_objects;  // object clusters (tracking/object_tracker.hpp)
 };
 
 // Each section's fields with their valid ranges (inclusive, the field's unit), visited as
@@ -134,6 +136,7 @@ void for_each_section(SlamOptions& o, VisitSection&& visit) {
   visit("local_ba", o.local_ba);
   visit("map", o.map);
   visit("lidar", o.lidar);
+  visit("visual_objects", o.visual_objects);
 }
 
 // Throws std::invalid_argument naming the option ("tracking.search_radius_px = inf is out of

@@ -39,19 +39,23 @@ System::System(const geometry::StereoCamera& camera, const SlamOptions& options)
       frame_builder_(camera, options),
       camera_tracker_(camera, options.tracking, frame_builder_.extractor().scale_factors(),
                       LevelWeights(frame_builder_.extractor().level_sigma2())),
-      local_mapper_(camera, options, LevelWeights(frame_builder_.extractor().level_sigma2())) {}
+      local_mapper_(camera, options, LevelWeights(frame_builder_.extractor().level_sigma2())),
+      object_tracker_(camera, options.visual_objects, frame_builder_.extractor().scale_factors(),
+                      LevelWeights(frame_builder_.extractor().level_sigma2())) {}
 
 void System::reset() {
   map_.clear();
   camera_tracker_.reset();
   local_mapper_.reset();
+  object_tracker_.reset();
   state_ = State::kEmpty;
   reference_keyframe_ = -1;
   trajectory_.clear();
 }
 
 TrackResult System::track(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
-                          const cv::Mat& labels, const Points3& points_c) {
+                          const cv::Mat& labels, const Points3& points_c,
+                          const cv::Mat& instances, const cv::Mat& flow) {
   TrackResult result;
   Frame frame;
   FrameBuildReport built = frame_builder_.build(index, timestamp, left, right, labels, points_c, &frame);
@@ -106,6 +110,12 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
     }
   } else if (state_ != State::kEmpty) {
     state_ = State::kLost;  // keep the velocity: the next prediction continues the motion
+  }
+
+  // 4. Objects: every cluster tracked against the camera pose just found (eq. 4).
+  if (tracked && (!instances.empty() || !object_tracker_.tracks().empty())) {
+    result.objects = object_tracker_.track(frame, instances, flow, road_up_w_);
+    timer.lap("objects");
   }
 
   record_trajectory(frame, result.status);

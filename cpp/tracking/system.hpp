@@ -15,6 +15,7 @@
 #include "tracking/camera_tracker.hpp"
 #include "tracking/frame_builder.hpp"
 #include "tracking/local_mapper.hpp"
+#include "tracking/object_tracker.hpp"
 #include "tracking/options.hpp"
 
 namespace twistslam::tracking {
@@ -30,6 +31,7 @@ struct TrackResult {
   int num_map_points = 0;
   int num_keyframes = 0;
   int num_lidar_depth = 0;  // keypoints that took their depth from the scan
+  ObjectTrackingReport objects;  // visual object tracking of this frame
   std::vector<std::pair<std::string, double>> timings_ms;  // stage -> ms, in pipeline order
 };
 
@@ -49,14 +51,18 @@ class System {
 
   // left / right: CV_8UC1 or CV_8UC3 (RGB, as numpy images are) of the camera's size;
   // labels: empty or CV_32SC1 class ids per pixel; points_c: the frame's LiDAR scan (N x 3,
-  // frame c; empty: none), used for keypoint depth when options.lidar.use_depth.
+  // frame c; empty: none), used for keypoint depth when options.lidar.use_depth;
+  // instances: empty or CV_32SC1 panoptic instance ids (0: none) and flow: empty or CV_32FC2
+  // optical flow from the previous frame, both for visual object tracking.
   // Throws std::invalid_argument on bad sizes.
   TrackResult track(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
-                    const cv::Mat& labels = cv::Mat(), const Points3& points_c = Points3());
+                    const cv::Mat& labels = cv::Mat(), const Points3& points_c = Points3(),
+                    const cv::Mat& instances = cv::Mat(), const cv::Mat& flow = cv::Mat());
 
   // T_w_c of every frame tracked so far, refined through the keyframes.
   std::vector<std::pair<TrajectoryEntry, Mat4>> trajectory() const;
   const map::Map& map() const { return map_; }
+  const ObjectTracker& objects() const { return object_tracker_; }
   const SlamOptions& options() const { return options_; }
   void reset();
 
@@ -68,6 +74,7 @@ class System {
   FrameBuilder frame_builder_;
   CameraTracker camera_tracker_;
   LocalMapper local_mapper_;
+  ObjectTracker object_tracker_;
   map::Map map_;
 
   enum class State { kEmpty, kTracking, kLost } state_ = State::kEmpty;
@@ -75,6 +82,8 @@ class System {
   // trajectory stores poses relative to it, and it is the keyframe decision's reference.
   int reference_keyframe_ = -1;
   std::vector<TrajectoryEntry> trajectory_;
+  // the road's normal in the world frame (planar link): "up" of the first camera (y down)
+  Vec3 road_up_w_ = Vec3(0, -1, 0);
 };
 
 }  // namespace twistslam::tracking

@@ -1,7 +1,8 @@
 """Typed configuration of the SLAM system: every threshold and weight, named, with its default.
 
 A :class:`Config` is one dataclass per section (``orb``, ``stereo``, ``tracking``,
-``keyframes``, ``local_ba``, ``map``, ``run``, ``objects``). Each field carries its unit and the reason for
+``keyframes``, ``local_ba``, ``map``, ``run``, ``objects``, ``lidar``,
+``visual_objects``). Each field carries its unit and the reason for
 its default (``dataclasses.fields(...)[i].metadata``), and both are written as comments into
 the YAML that :meth:`Config.to_yaml` saves beside every result. The C++ core receives all
 sections but ``run`` and ``objects`` (read by the object tracker) as the nested dictionary
@@ -31,6 +32,7 @@ from ._settings import coerce, param
 from .config_lidar import PYTHON_ONLY as _LIDAR_PYTHON_ONLY
 from .config_lidar import LidarConfig
 from .config_objects import ObjectsConfig
+from .config_visual_objects import VisualObjectsConfig
 
 
 
@@ -180,6 +182,7 @@ SECTIONS: dict[str, type] = {
     "run": RunConfig,
     "objects": ObjectsConfig,
     "lidar": LidarConfig,
+    "visual_objects": VisualObjectsConfig,
 }
 #: sections the SLAM system does not read (the object tracker reads ``objects`` itself)
 _NOT_FOR_CORE = ("run", "objects")
@@ -204,6 +207,7 @@ class Config:
     run: RunConfig = field(default_factory=RunConfig)
     objects: ObjectsConfig = field(default_factory=ObjectsConfig)
     lidar: LidarConfig = field(default_factory=LidarConfig)
+    visual_objects: VisualObjectsConfig = field(default_factory=VisualObjectsConfig)
 
     def __post_init__(self) -> None:
         self.validate()

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from dataclasses import dataclass
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -22,7 +23,9 @@ from .datasets import Frame, Sequence, open_sequence
 from .inputs import PanopticLabels, check_stereo, load_frame
 from .input_checks import check_first_frames
 from .progress import RateBar
+from .objects.visual import visual_objects
 from .result import Result
+from .perception.run_stages import Perception, perception_stages
 from .slam import Slam
 from .timings import Timings
 
@@ -47,17 +50,42 @@ def _config(config: Config | str | Path | dict | None) -> Config:
     return Config.from_yaml(config)
 
 
+@dataclass
+class _Loaded:
+    """One frame and what the perception stages made of it."""
+
+    frame: Frame
+    class_ids: np.ndarray | None
+    instance_ids: np.ndarray | None
+    flow: np.ndarray | None
+    stage_ms: dict[str, float]
+
+
 def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | None,
-                lidar: bool = False) -> Iterator[tuple[Frame, np.ndarray | None, float]]:
-    """``(frame, class_ids, load_ms)`` per index; frame i+1 is read in a background thread
-    while the caller tracks frame i (decoding the PNGs costs about as much as tracking, and
-    both the decoder and the core release the GIL)."""
-    def load(i: int):
+                perception: Perception, lidar: bool = False) -> Iterator[_Loaded]:
+    """Each frame with its segmentation and flow; frame i+1 is read and segmented, and its flow
+    computed, in a background thread while the caller tracks frame i (the PNG decoder, OpenCV
+    and the core all release the GIL)."""
+    previous: list[Frame | None] = [None]
+
+    def load(i: int) -> _Loaded:
         start = time.perf_counter()
         # the first frame's scan also serves the "auto" disparity offset (twistslam.camera_lidar)
-        frame = load_frame(sequence, i, lidar=lidar or i == indices[0])
+        frame = load_frame(sequence, i, lidar=lidar or perception.needs_lidar or i == indices[0])
         class_ids = labels.read(i) if labels is not None else None
-        return frame, class_ids, (time.perf_counter() - start) * 1e3
+        ms = {"load": (time.perf_counter() - start) * 1e3}
+        instance_ids = flow = None
+        if perception.segmentation is not None:
+            start = time.perf_counter()
+            panoptic = perception.panoptic(frame)
+            class_ids, instance_ids = panoptic.class_id, panoptic.instance_id
+            ms["segmentation"] = (time.perf_counter() - start) * 1e3
+        if perception.flow is not None:
+            start = time.perf_counter()
+            flow = perception.optical_flow(previous[0], frame)
+            ms["flow"] = (time.perf_counter() - start) * 1e3
+        previous[0] = frame
+        return _Loaded(frame, class_ids, instance_ids, flow, ms)
 
     with ThreadPoolExecutor(max_workers=1) as pool:
         pending = pool.submit(load, indices[0]) if len(indices) else None
@@ -78,8 +106,10 @@ def frame_range(config: Config, length: int) -> range:
 
 
 def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = None,
-        progress: bool = True) -> Result:
-    """Track the camera through a stereo sequence.
+        progress: bool = True, *, segmentation: Any = "auto", flow: Any = "auto",
+        detections: Any = None, flow_weights: str | Path | None = None, viz: bool = False,
+        viz_save: str | Path | None = None) -> Result:
+    """Track the camera and every object cluster through a stereo sequence.
 
     Parameters
     ----------
@@ -90,6 +120,21 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         A :class:`Config`, a YAML file of overrides, a nested dict, or ``None`` (defaults).
     progress
         Show a progress bar with the running rate in Hz.
+    segmentation
+        Panoptic source for the object clusters and the static / dynamic split (eq. 3):
+        ``"auto"`` (the sequence's panoptic files, else masks from its detections and scans,
+        else none), ``"files"``, ``"boxes"``, ``"none"``, or a callable ``frame -> Panoptic``
+        (:mod:`twistslam.perception.run_stages`).
+    flow
+        Optical flow source for the object search: ``"auto"`` (files, else DIS), ``"files"``,
+        ``"dis"``, ``"raft"`` (with ``flow_weights``), ``"none"``, or a callable.
+    detections
+        3D detections for ``segmentation="boxes"`` (a file, folder or ObjectTable); default:
+        the sequence's ``detections/<name>/SEQ.txt``.
+    flow_weights
+        RAFT state-dict file for ``flow="raft"``.
+    viz, viz_save
+        Log the run to a rerun viewer (``pip install twistslam[viz]``) / to an ``.rrd`` file.
 
     Returns
     -------
@@ -110,8 +155,15 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     check_stereo(sequence)
     indices = frame_range(config, len(sequence))
     check_first_frames(sequence, indices)  # resized images, identical or swapped cameras
+    perception = perception_stages(sequence, segmentation, flow, detections=detections,
+                                   flow_weights=flow_weights)
+    if (perception.segmentation is not None and config.visual_objects.enabled
+            and not config.tracking.dynamic_class_ids):
+        # eq. 3: object classes track their clusters, never the camera
+        config.tracking.dynamic_class_ids = list(config.visual_objects.object_class_ids)
     labels = None
-    if config.run.use_labels and config.tracking.dynamic_class_ids:
+    if (perception.segmentation is None and config.run.use_labels
+            and config.tracking.dynamic_class_ids):
         # only worth reading when some classes are masked
         labels = PanopticLabels.find(sequence, config.run.labels_dir)
         if labels is None:
@@ -121,22 +173,35 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     slam = Slam(config, sequence.calib)
     name = getattr(sequence, "seq", None)
 
+    viewer = None
+    if viz or viz_save is not None:
+        from .viz.run_logger import RunViewer
+
+        viewer = RunViewer(sequence, spawn=viz, save=viz_save)
     tracked, stages, frame_ms = [], [], []
     with RateBar(len(indices), f"seq {name}" if name else "run", enabled=progress) as bar:
         last = time.perf_counter()
-        for frame, class_ids, load_ms in _prefetched(sequence, indices, labels,
-                                                     lidar=config.lidar.use_depth):
-            out = slam.track(frame, class_ids)
+        for item in _prefetched(sequence, indices, labels, perception,
+                                lidar=config.lidar.use_depth):
+            out = slam.track(item.frame, item.class_ids, instances=item.instance_ids,
+                             flow=item.flow)
             now = time.perf_counter()
             frame_ms.append((now - last) * 1e3)
             last = now
-            stages.append({"load": load_ms, **out.timings_ms})
+            stages.append({**item.stage_ms, **out.timings_ms})
             tracked.append(out)
             bar.step(frame_ms[-1], out.status)
+            if viewer is not None:
+                viewer.log(item, out, slam)
+    if viewer is not None:
+        viewer.close()
 
     tracked_poses = np.stack([t.T_w_c for t in tracked])
+    frames = [t.index for t in tracked]
+    camera_poses = _refined(slam.trajectory(), frames, tracked_poses)
+    camera_poses = dict(zip(frames, camera_poses))
     return Result(
-        camera_poses=_refined(slam.trajectory(), [t.index for t in tracked], tracked_poses),
+        camera_poses=np.stack([camera_poses[f] for f in frames]),
         tracked_poses=tracked_poses,
         status=np.array([t.status for t in tracked]),
         frames=np.array([t.index for t in tracked], dtype=np.int64),
@@ -149,6 +214,9 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         map_points=slam.map_points(),
         config=config,
         seq=name,
+        objects=visual_objects(slam.objects(), sequence, camera_poses, period=_period(sequence)),
+        segmentation=perception.segmentation_name,
+        flow=perception.flow_name,
     )
 
 
@@ -163,3 +231,8 @@ def _refined(trajectory: dict | None, frames: list[int], tracked: np.ndarray) ->
         if f in row and np.isfinite(trajectory["T_w_c"][row[f]]).all():
             poses[k] = trajectory["T_w_c"][row[f]]
     return poses
+
+
+def _period(sequence: Sequence) -> float:
+    """Seconds between frames (KITTI's 10 Hz unless the sequence says otherwise)."""
+    return float(getattr(sequence, "period", 0.1) or 0.1)

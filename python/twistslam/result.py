@@ -5,12 +5,16 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .config import Config
 from .datasets import write_poses
 from .timings import Timings
+
+if TYPE_CHECKING:
+    from .objects.visual import VisualObjects
 
 #: file names inside a results directory (camera_poses.txt is what ``twistslam eval`` reads)
 FILES = {"camera_poses": "camera_poses.txt", "timings": "timings.json",
@@ -34,6 +38,9 @@ class Result:
     timings : per-frame stage times (:class:`~twistslam.timings.Timings`).
     keyframes : ``frame_index`` (K,), ``T_w_c`` (K, 4, 4) after local BA.
     map_points : ``X_w`` (M, 3), ``cluster_id`` (M,), ``num_observations`` (M,).
+    objects : the object clusters (list-like of
+        :class:`~twistslam.objects.result.TrackedObject`, plus ``tracking``, the boxes in the
+        KITTI tracking format); ``None`` or empty without segmentation.
     config : the resolved settings of the run.
     seq : sequence name, when known.
     """
@@ -53,6 +60,11 @@ class Result:
     #: estimated from the first frame's scan) and where it came from
     disparity_offset: float | None = None
     disparity_offset_source: str = ""
+    #: the object clusters tracked in the SLAM (:class:`~twistslam.objects.VisualObjects`;
+    #: empty without a segmentation source) and the perception sources the run used
+    objects: "VisualObjects | None" = None
+    segmentation: str = "none"
+    flow: str = "none"
 
     def __len__(self) -> int:
         return len(self.frames)
@@ -86,4 +98,6 @@ class Result:
         self.config.to_yaml(paths["config"])
         paths["status"].write_text(
             "".join(f"{i} {s}\n" for i, s in zip(self.frames, self.status)), encoding="utf-8")
+        if self.objects is not None and self.seq is not None:
+            paths.update(self.objects.save(out, self.seq))
         return paths

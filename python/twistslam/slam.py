@@ -42,6 +42,8 @@ class TrackedFrame:
     num_keyframes: int = 0
     num_lidar_depth: int = 0  # keypoints that took their depth from the LiDAR scan
     timings_ms: dict[str, float] = field(default_factory=dict)
+    num_objects_tracked: int = 0  # object clusters with a valid twist in this frame
+    num_object_points: int = 0    # their matched inlier points
 
 
 def _new_system(camera, options: dict[str, Any]):
@@ -135,7 +137,8 @@ class Slam:
             self._system = _new_system(self.camera, self.config.to_options())
         return self._system
 
-    def track(self, frame: Frame, labels: np.ndarray | None = None) -> TrackedFrame:
+    def track(self, frame: Frame, labels: np.ndarray | None = None, *,
+              instances: np.ndarray | None = None, flow: np.ndarray | None = None) -> TrackedFrame:
         """Track one stereo frame.
 
         Parameters
@@ -146,6 +149,12 @@ class Slam:
         labels
             Optional ``(H, W)`` panoptic class ids of the left image; pixels of
             ``config.tracking.dynamic_class_ids`` give no points to camera tracking.
+        instances
+            Optional ``(H, W)`` panoptic instance ids (0: none): instances of
+            ``config.visual_objects.object_class_ids`` become tracked object clusters.
+        flow
+            Optional ``(H, W, 2)`` float32 optical flow from the previous frame's left image
+            (NaN: unknown), where object tracking starts its search.
 
         Raises
         ------
@@ -169,13 +178,23 @@ class Slam:
             if labels.shape != (height, width):
                 raise ValueError(f"frame {i}: labels of shape {labels.shape}, expected "
                                  f"{(height, width)}")
+        if instances is not None:
+            instances = np.ascontiguousarray(instances, dtype=np.int32)
+            if instances.shape != (height, width):
+                raise ValueError(f"frame {i}: instances of shape {instances.shape}, expected "
+                                 f"{(height, width)}")
+        if flow is not None:
+            flow = np.ascontiguousarray(flow, dtype=np.float32)
+            if flow.shape != (height, width, 2):
+                raise ValueError(f"frame {i}: flow of shape {flow.shape}, expected "
+                                 f"{(height, width, 2)}")
         system = self._system_for(frame, labels)
         scan = None
         if self.config.lidar.use_depth and frame.points_c is not None:
             scan = np.asarray(frame.points_c)[:, :3]
 
         start = time.perf_counter()
-        out = system.track(i, float(frame.timestamp), left, right, labels, scan)
+        out = system.track(i, float(frame.timestamp), left, right, labels, scan, instances, flow)
         track_ms = (time.perf_counter() - start) * 1e3
 
         T_w_c = np.asarray(out["T_w_c"], dtype=np.float64).reshape(4, 4)
@@ -195,6 +214,8 @@ class Slam:
             num_keyframes=int(out.get("num_keyframes", 0)),
             num_lidar_depth=int(out.get("num_lidar_depth", 0)),
             timings_ms=timings,
+            num_objects_tracked=int(out.get("num_objects_tracked", 0)),
+            num_object_points=int(out.get("num_object_points", 0)),
         )
 
     def _predict(self) -> np.ndarray:
@@ -229,6 +250,14 @@ class Slam:
             return {"X_w": np.zeros((0, 3)), "cluster_id": np.zeros(0, np.int64),
                     "num_observations": np.zeros(0, np.int64)}
         return {k: np.asarray(v) for k, v in self._system.map_points().items()}
+
+    def objects(self) -> list[dict]:
+        """Every object cluster the core started: its track (``id``, ``class_id``, ``link``,
+        ``frames``, ``T_w_o`` (K, 4, 4) world frame, ``twist``, ``detected`` = tracked that frame,
+        ...) and ``points_o`` (M, 3), its points in the object frame."""
+        if self._system is None:
+            return []
+        return list(self._system.objects())
 
     def reset(self) -> None:
         """Forget the map and the trajectory; the next frame initialises a new map."""

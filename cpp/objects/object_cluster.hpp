@@ -1,0 +1,40 @@
+#pragma once
+// The points of an object cluster (paper sec. "Clusters creation"): 3D points in the object
+// frame o, with the descriptor and the last 2D observation that visual tracking (eq. 4)
+// searches from. The cluster's pose, twist and lifetime are its ObjectTrack (object_track.hpp):
+// one object state for the detections tracker, visual tracking and LiDAR fusion.
+#include <vector>
+
+#include "geometry/types.hpp"
+#include "map/descriptor.hpp"
+#include "objects/label_votes.hpp"
+
+namespace twistslam::objects {
+
+struct ObjectPointObservation {
+  int frame = -1;
+  Vec2 uv = Vec2::Zero();  // px, left image
+  double u_right = -1;     // px; < 0: mono
+  int octave = 0;
+};
+
+struct ObjectPoint {
+  Vec3 X_o = Vec3::Zero();  // in the object frame (moves with the object)
+  map::Descriptor descriptor{};
+  ObjectPointObservation last;  // the latest observation (flow-guided search starts here)
+  int visible = 1;              // frames in which it was predicted inside the image
+  int found = 1;                // frames in which it was matched and an inlier
+  LabelVotes class_votes;       // classes of its 2D observations (S3LAM-style vote)
+
+  double found_ratio() const { return visible > 0 ? static_cast<double>(found) / visible : 0.0; }
+};
+
+struct ObjectCluster {
+  int track_id = -1;              // its ObjectTrack
+  std::vector<ObjectPoint> points;
+  LabelVotes class_votes;         // classes of the instances associated with it
+  int instance = -1;              // instance id associated in the last frame (-1: none)
+  Vec6 velocity = Vec6::Zero();   // last estimated twist (per frame), for the prediction
+};
+
+}  // namespace twistslam::objects

@@ -1,0 +1,411 @@
+#include "tracking/object_tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <unordered_set>
+
+#include "geometry/link_projection.hpp"
+#include "geometry/se3.hpp"
+#include "objects/instance_association.hpp"
+#include "objects/motion_model.hpp"
+
+namespace twistslam::tracking {
+namespace {
+
+int pixel_value(const cv::Mat& image, const Vec2& uv) {
+  const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
+  if (u < 0 || v < 0 || u >= image.cols || v >= image.rows) return 0;
+  return image.at<int>(v, u);
+}
+
+// Bilinear flow at uv; false where it is missing (NaN) or uv lies outside the image.
+bool flow_at(const cv::Mat& flow, const Vec2& uv, Vec2* out) {
+  if (flow.empty()) return false;
+  const double x = uv.x(), y = uv.y();
+  if (!(x >= 0 && y >= 0 && x <= flow.cols - 1 && y <= flow.rows - 1)) return false;
+  const int x0 = std::min(static_cast<int>(x), flow.cols - 2 < 0 ? 0 : flow.cols - 2);
+  const int y0 = std::min(static_cast<int>(y), flow.rows - 2 < 0 ? 0 : flow.rows - 2);
+  const int x1 = std::min(x0 + 1, flow.cols - 1), y1 = std::min(y0 + 1, flow.rows - 1);
+  const double ax = x - x0, ay = y - y0;
+  Vec2 f = Vec2::Zero();
+  const cv::Vec2f f00 = flow.at<cv::Vec2f>(y0, x0), f01 = flow.at<cv::Vec2f>(y0, x1),
+                  f10 = flow.at<cv::Vec2f>(y1, x0), f11 = flow.at<cv::Vec2f>(y1, x1);
+  for (int k = 0; k < 2; ++k)
+    f[k] = (1 - ay) * ((1 - ax) * f00[k] + ax * f01[k]) + ay * ((1 - ax) * f10[k] + ax * f11[k]);
+  if (!f.allFinite()) return false;
+  *out = uv + f;
+  return true;
+}
+
+Vec3 transform(const Mat4& T, const Vec3& X) {
+  return T.topLeftCorner<3, 3>() * X + T.topRightCorner<3, 1>();
+}
+
+bool contains(const std::vector<int>& ids, int id) {
+  return std::find(ids.begin(), ids.end(), id) != ids.end();
+}
+
+}  // namespace
+
+ObjectTracker::ObjectTracker(const geometry::StereoCamera& camera,
+                             const ObjectTrackingOptions& options,
+                             const std::vector<float>& scale_factors, LevelWeights weights)
+    : camera_(camera), options_(options), scale_factors_(scale_factors), weights_(std::move(weights)) {
+  lm_options_.max_iterations = options.lm_iterations;
+  lm_options_.min_inliers = options.min_inliers;
+}
+
+void ObjectTracker::reset() {
+  tracks_.clear();
+  clusters_.clear();
+  next_id_ = 0;
+  last_frame_ = -1;
+}
+
+objects::TwistObservation ObjectTracker::observation(const objects::ObjectPoint& p,
+                                                     const Frame& frame, int k) const {
+  objects::TwistObservation o;
+  o.X_o = p.X_o;
+  o.uv = frame.keypoints.uv[k];
+  o.u_right = frame.keypoints.u_right[k];
+  o.inv_sigma2 = weights_.at(frame.keypoints.octave[k]);
+  return o;
+}
+
+std::vector<ObjectTracker::Match> ObjectTracker::search_cluster(
+    const objects::ObjectCluster& cluster, const Mat4& T_c_o, const Frame& frame,
+    const cv::Mat& instances, const cv::Mat& flow,
+    objects::ClusterInstanceEvidence* evidence) const {
+  std::vector<Match> matches;
+  std::vector<int> candidates;
+  for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) {
+    const objects::ObjectPoint& p = cluster.points[i];
+    const Vec3 X_c = transform(T_c_o, p.X_o);
+    const bool in_front = X_c.z() > 0.1;
+    const Vec2 projected = in_front ? camera_.project(X_c) : Vec2(-1e9, -1e9);
+    if (in_front && camera_.in_image(projected)) {
+      ++evidence->num_projected;
+      if (!instances.empty()) evidence->projected.add(pixel_value(instances, projected));
+    }
+    Vec2 predicted;
+    double radius;
+    if (p.last.frame == last_frame_ && flow_at(flow, p.last.uv, &predicted)) {
+      radius = options_.flow_radius_px;  // eq. 4's search around the flow prediction
+    } else if (in_front) {
+      predicted = projected;
+      radius = options_.projection_radius_px;
+    } else {
+      continue;
+    }
+    const double scale =
+        scale_factors_[std::min<size_t>(std::max(p.last.octave, 0), scale_factors_.size() - 1)];
+    frame.grid.query(predicted.x(), predicted.y(), radius * scale, &candidates);
+    int best = -1, best_distance = options_.max_hamming + 1;
+    for (int k : candidates) {
+      if (claimed_by_[k] >= 0) continue;
+      const int d = map::hamming(p.descriptor, frame.keypoints.descriptors[k]);
+      if (d < best_distance) best = k, best_distance = d;
+    }
+    if (best < 0) continue;
+    matches.push_back({i, best, best_distance});
+  }
+  // one point per keypoint: the closest descriptor keeps it
+  std::sort(matches.begin(), matches.end(), [](const Match& a, const Match& b) {
+    return a.keypoint != b.keypoint ? a.keypoint < b.keypoint : a.distance < b.distance;
+  });
+  matches.erase(std::unique(matches.begin(), matches.end(),
+                            [](const Match& a, const Match& b) { return a.keypoint == b.keypoint; }),
+                matches.end());
+  for (const Match& m : matches) evidence->shared.add(instance_of_keypoint_[m.keypoint]);
+  return matches;
+}
+
+bool ObjectTracker::keypoint_allowed(int k, int instance) const {
+  if (claimed_by_[k] >= 0) return false;
+  const int on = instance_of_keypoint_[k];
+  if (instance >= 0) return on == instance;
+  // no mask this frame: anything but another cluster's instance
+  return on <= 0 || !assigned_instances_.count(on);
+}
+
+void ObjectTracker::refine_matches(const objects::ObjectCluster& cluster, const Mat4& T_c_o,
+                                   const Frame& frame, int instance,
+                                   std::vector<Match>* matches) const {
+  std::vector<std::uint8_t> matched(cluster.points.size(), 0), used(frame.keypoints.size(), 0);
+  for (const Match& m : *matches) matched[m.point] = 1, used[m.keypoint] = 1;
+  std::vector<int> candidates;
+  for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) {
+    if (matched[i]) continue;
+    const objects::ObjectPoint& p = cluster.points[i];
+    const Vec3 X_c = transform(T_c_o, p.X_o);
+    if (X_c.z() <= 0.1) continue;
+    const Vec2 uv = camera_.project(X_c);
+    if (!camera_.in_image(uv)) continue;
+    const double scale =
+        scale_factors_[std::min<size_t>(std::max(p.last.octave, 0), scale_factors_.size() - 1)];
+    frame.grid.query(uv.x(), uv.y(), options_.refine_radius_px * scale, &candidates);
+    int best = -1, best_distance = options_.max_hamming + 1;
+    for (int k : candidates) {
+      if (used[k] || !keypoint_allowed(k, instance)) continue;
+      const int d = map::hamming(p.descriptor, frame.keypoints.descriptors[k]);
+      if (d < best_distance) best = k, best_distance = d;
+    }
+    if (best < 0) continue;
+    used[best] = 1;
+    matches->push_back({i, best, best_distance});
+  }
+}
+
+bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match> matches,
+                                   int instance, const Mat4& T_w_o_pred) {
+  objects::ObjectCluster& cluster = clusters_[c];
+  objects::ObjectTrack& track = tracks_[c];
+  const Mat4 T_w_o_prev = track.last().T_w_o;
+  matches.erase(std::remove_if(matches.begin(), matches.end(),
+                               [&](const Match& m) { return !keypoint_allowed(m.keypoint, instance); }),
+                matches.end());
+  auto estimate = [&](const Vec6& xi_init) {
+    std::vector<objects::TwistObservation> obs;
+    obs.reserve(matches.size());
+    for (const Match& m : matches) obs.push_back(observation(cluster.points[m.point], frame, m.keypoint));
+    return objects::estimate_object_twist(camera_, frame.T_c_w, T_w_o_prev, track.Pi, obs,
+                                          xi_init, lm_options_);
+  };
+  objects::TwistEstimate est;
+  if (static_cast<int>(matches.size()) >= options_.min_inliers) est = estimate(track.Pi * cluster.velocity);
+  // second pass (eq. 4): project every point with the new pose, re-match, optimise again
+  const Mat4 T_w_o_first = est.valid ? est.T_w_o : T_w_o_pred;
+  const size_t before = matches.size();
+  refine_matches(cluster, frame.T_c_w * T_w_o_first, frame, instance, &matches);
+  if (matches.size() > before && static_cast<int>(matches.size()) >= options_.min_inliers)
+    est = estimate(est.valid ? est.xi : Vec6(track.Pi * cluster.velocity));
+  const bool valid = est.valid && est.num_inliers >= options_.min_inliers;
+
+  objects::TrackFrame row;
+  row.frame = frame.index;
+  if (valid) {
+    row.T_w_o = est.T_w_o;
+    track.last().xi = est.xi;  // eq. 2: T_w_o(i+1) = exp(Pi xi_i) T_w_o(i)
+    cluster.velocity = est.xi;
+    row.detected = true;
+    ++track.hits;
+    track.misses = 0;
+    track.state = objects::TrackState::kConfirmed;
+    if (track.confirmed_frame < 0) track.confirmed_frame = frame.index;
+  } else {
+    row.T_w_o = T_w_o_pred;
+    track.last().xi = track.Pi * cluster.velocity;
+    ++track.misses;
+    track.state = track.misses > options_.max_misses ? objects::TrackState::kDead
+                                                      : objects::TrackState::kLost;
+  }
+  row.reported = valid;
+  track.frames.push_back(row);
+
+  // point statistics: visible where predicted inside the image, found where an inlier
+  const Mat4 T_c_o = frame.T_c_w * row.T_w_o;
+  for (objects::ObjectPoint& p : cluster.points) {
+    const Vec3 X_c = transform(T_c_o, p.X_o);
+    if (X_c.z() > 0.1 && camera_.in_image(camera_.project(X_c))) ++p.visible;
+  }
+  if (valid) {
+    for (size_t j = 0; j < matches.size(); ++j) {
+      if (!est.inlier[j]) continue;
+      const Match& m = matches[j];
+      objects::ObjectPoint& p = cluster.points[m.point];
+      p.last = {frame.index, frame.keypoints.uv[m.keypoint], frame.keypoints.u_right[m.keypoint],
+                frame.keypoints.octave[m.keypoint]};
+      p.descriptor = frame.keypoints.descriptors[m.keypoint];
+      p.class_votes.add(frame.keypoints.label[m.keypoint]);
+      ++p.found;
+      claimed_by_[m.keypoint] = c;
+    }
+  }
+  if (instance >= 0) {
+    cluster.instance = instance;
+    const auto cls = instance_class_.find(instance);
+    if (cls != instance_class_.end()) cluster.class_votes.add(cls->second);
+    add_points(c, frame, instance);
+  }
+  cull(cluster);
+  return valid;
+}
+
+std::vector<std::pair<int, Vec3>> ObjectTracker::free_instance_points(const Frame& frame,
+                                                                      int instance) const {
+  std::vector<std::pair<int, Vec3>> out;
+  const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
+  const map::StereoKeypoints& k = frame.keypoints;
+  for (int i = 0; i < static_cast<int>(k.size()); ++i) {
+    if (instance_of_keypoint_[i] != instance || claimed_by_[i] >= 0 || !k.has_depth(i) ||
+        k.depth[i] > options_.max_depth_m)
+      continue;
+    out.emplace_back(i, transform(T_w_c, camera_.backproject(k.uv[i], k.depth[i])));
+  }
+  return out;
+}
+
+namespace {
+// Per-axis median of the points (robust centre: a mask bleeding onto the background gives a
+// few far points that a mean would follow).
+Vec3 median_point(std::vector<Vec3> points) {
+  Vec3 m;
+  for (int a = 0; a < 3; ++a) {
+    std::nth_element(points.begin(), points.begin() + points.size() / 2, points.end(),
+                     [a](const Vec3& x, const Vec3& y) { return x[a] < y[a]; });
+    m[a] = points[points.size() / 2][a];
+  }
+  return m;
+}
+}  // namespace
+
+void ObjectTracker::add_points(int c, const Frame& frame, int instance) {
+  objects::ObjectCluster& cluster = clusters_[c];
+  if (static_cast<int>(cluster.points.size()) >= options_.max_points) return;
+  const auto fresh = free_instance_points(frame, instance);
+  if (fresh.empty()) return;
+  const Mat4 T_o_w = geometry::se3_inverse(tracks_[c].last().T_w_o);
+  std::vector<Vec3> existing;
+  for (const auto& p : cluster.points) existing.push_back(p.X_o);
+  const Vec3 centre = existing.empty() ? Vec3::Zero() : median_point(existing);
+  for (const auto& [k, X_w] : fresh) {
+    if (static_cast<int>(cluster.points.size()) >= options_.max_points) break;
+    objects::ObjectPoint p;
+    p.X_o = transform(T_o_w, X_w);
+    if ((p.X_o - centre).norm() > options_.max_point_spread_m) continue;
+    p.descriptor = frame.keypoints.descriptors[k];
+    p.last = {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]};
+    p.class_votes.add(frame.keypoints.label[k]);
+    cluster.points.push_back(p);
+    claimed_by_[k] = c;
+  }
+}
+
+bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id, const Vec3& up_w) {
+  const auto fresh = free_instance_points(frame, instance);
+  if (static_cast<int>(fresh.size()) < options_.min_new_cluster_points) return false;
+  std::vector<Vec3> X;
+  for (const auto& f : fresh) X.push_back(f.second);
+  const Vec3 median = median_point(X);
+  std::vector<std::pair<int, Vec3>> kept;
+  Vec3 centroid = Vec3::Zero();
+  for (const auto& f : fresh)
+    if ((f.second - median).norm() <= options_.max_point_spread_m) kept.push_back(f), centroid += f.second;
+  if (static_cast<int>(kept.size()) < options_.min_new_cluster_points) return false;
+  centroid /= static_cast<double>(kept.size());
+
+  objects::ObjectTrack track;
+  track.id = next_id_++;
+  track.class_id = class_id;
+  const bool planar = contains(options_.planar_class_ids, class_id);
+  track.link = planar ? geometry::LinkType::kPlanar : geometry::LinkType::kFree;
+  track.Pi = planar ? geometry::projector_planar(up_w) : geometry::projector_free();
+  track.state = objects::TrackState::kTentative;
+  objects::TrackFrame row;
+  row.frame = frame.index;
+  row.T_w_o.topRightCorner<3, 1>() = centroid;  // identity rotation at the centroid (issue 10)
+  row.detected = true;
+  row.reported = true;
+  track.frames.push_back(row);
+  track.hits = 1;
+  track.confirmed_frame = frame.index;
+  track.state = objects::TrackState::kConfirmed;
+
+  objects::ObjectCluster cluster;
+  cluster.track_id = track.id;
+  cluster.instance = instance;
+  cluster.class_votes.add(class_id);
+  const int c = static_cast<int>(clusters_.size());
+  for (const auto& [k, X_w] : kept) {
+    if (static_cast<int>(cluster.points.size()) >= options_.max_points) break;
+    objects::ObjectPoint p;
+    p.X_o = X_w - centroid;
+    p.descriptor = frame.keypoints.descriptors[k];
+    p.last = {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]};
+    p.class_votes.add(frame.keypoints.label[k]);
+    cluster.points.push_back(p);
+    claimed_by_[k] = c;
+  }
+  tracks_.push_back(std::move(track));
+  clusters_.push_back(std::move(cluster));
+  return true;
+}
+
+void ObjectTracker::cull(objects::ObjectCluster& cluster) const {
+  auto& pts = cluster.points;
+  pts.erase(std::remove_if(pts.begin(), pts.end(),
+                           [&](const objects::ObjectPoint& p) {
+                             return p.visible >= options_.cull_after_visible &&
+                                    p.found_ratio() < options_.min_found_ratio;
+                           }),
+            pts.end());
+}
+
+ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& instances,
+                                          const cv::Mat& flow, const Vec3& up_w) {
+  ObjectTrackingReport report;
+  if (!options_.enabled) return report;
+  if (!instances.empty() && (instances.type() != CV_32SC1 || instances.cols != camera_.width ||
+                             instances.rows != camera_.height))
+    throw std::invalid_argument("instances: expected int32 instance ids of the image size");
+  if (!flow.empty() && (flow.type() != CV_32FC2 || flow.cols != camera_.width ||
+                        flow.rows != camera_.height))
+    throw std::invalid_argument("flow: expected float32 (u, v) per pixel of the image size");
+
+  const size_t n = frame.keypoints.size();
+  instance_of_keypoint_.assign(n, 0);
+  if (!instances.empty())
+    for (size_t i = 0; i < n; ++i) instance_of_keypoint_[i] = pixel_value(instances, frame.keypoints.uv[i]);
+  claimed_by_.assign(n, -1);
+  assigned_instances_.clear();
+  std::map<int, objects::LabelVotes> votes;  // instance -> classes of its keypoints
+  for (size_t i = 0; i < n; ++i)
+    if (instance_of_keypoint_[i] > 0) votes[instance_of_keypoint_[i]].add(frame.keypoints.label[i]);
+  instance_class_.clear();
+  for (const auto& [instance, v] : votes) instance_class_[instance] = v.best();
+
+  // 1. search every live cluster from its prediction
+  std::vector<int> live;
+  std::vector<Mat4> predicted;
+  std::vector<std::vector<Match>> matches;
+  std::vector<objects::ClusterInstanceEvidence> evidence;
+  for (int c = 0; c < static_cast<int>(tracks_.size()); ++c) {
+    if (!tracks_[c].alive()) continue;
+    live.push_back(c);
+    predicted.push_back(objects::predict_pose(tracks_[c].last().T_w_o, clusters_[c].velocity, tracks_[c].Pi));
+    evidence.emplace_back();
+    matches.push_back(search_cluster(clusters_[c], frame.T_c_w * predicted.back(), frame,
+                                     instances, flow, &evidence.back()));
+  }
+  // 2. instances <-> clusters
+  objects::InstanceAssociationOptions assoc{options_.min_shared_points, options_.min_mask_overlap};
+  const std::vector<int> instance_of = objects::associate_instances(evidence, assoc);
+  for (int inst : instance_of)
+    if (inst > 0) assigned_instances_.insert(inst);
+  // 3. twists, largest clusters first (they claim contested keypoints)
+  std::vector<int> order(live.size());
+  for (size_t j = 0; j < order.size(); ++j) order[j] = static_cast<int>(j);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return clusters_[live[a]].points.size() > clusters_[live[b]].points.size();
+  });
+  for (int j : order) {
+    const bool valid = update_cluster(live[j], frame, std::move(matches[j]), instance_of[j], predicted[j]);
+    ++(valid ? report.num_tracked : report.num_missed);
+  }
+  // 4. new clusters from the instances of object classes nobody claimed
+  if (!instances.empty()) {
+    for (const auto& [instance, class_id] : instance_class_) {
+      if (assigned_instances_.count(instance) || !contains(options_.object_class_ids, class_id)) continue;
+      report.num_new += start_cluster(frame, instance, class_id, up_w);
+    }
+  }
+  for (int c = 0; c < static_cast<int>(tracks_.size()); ++c)
+    if (tracks_[c].alive()) tracks_[c].class_id = clusters_[c].class_votes.best(tracks_[c].class_id);
+  for (int owner : claimed_by_) report.num_points += owner >= 0;
+  last_frame_ = frame.index;
+  return report;
+}
+
+}  // namespace twistslam::tracking

@@ -1,0 +1,105 @@
+#pragma once
+// Visual tracking of every object cluster inside the SLAM (paper sec. "Clusters creation"
+// and "Dynamic object tracking", eq. 1-4), the third component beside camera tracking and
+// local mapping. Per frame, after the camera pose is known:
+//   1. each live cluster's points are searched around their optical-flow-predicted position
+//      (or the motion model's projection when there is no flow) by descriptor;
+//   2. the frame's panoptic instances are associated with clusters by the matched points
+//      they share, then by mask overlap (objects/instance_association.hpp);
+//   3. the twist is estimated by LM on Pi xi (eq. 4, objects/twist_estimation.hpp), the
+//      cluster's points are projected with the new pose and re-matched, the twist estimated
+//      again, and the pose updated by eq. 2;
+//   4. unmatched stereo keypoints inside the associated mask join the cluster; instances of
+//      object classes with no cluster start one (identity rotation at the centroid);
+//   5. points rarely found are culled; a cluster without a valid twist for max_misses frames
+//      ends its track.
+// The state is objects::ObjectTrack (one per cluster) + objects::ObjectCluster (its points).
+#include <map>
+#include <opencv2/core/mat.hpp>
+#include <string>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+#include "geometry/stereo_camera.hpp"
+#include "objects/instance_association.hpp"
+#include "objects/object_cluster.hpp"
+#include "objects/object_track.hpp"
+#include "objects/twist_estimation.hpp"
+#include "tracking/frame.hpp"
+#include "tracking/level_weights.hpp"
+#include "tracking/object_tracking_options.hpp"
+
+namespace twistslam::tracking {
+
+struct ObjectTrackingReport {
+  int num_tracked = 0;  // clusters with a valid twist this frame
+  int num_new = 0;      // clusters started this frame
+  int num_missed = 0;   // live clusters without a valid twist (predicted)
+  int num_points = 0;   // matched inlier points over all clusters
+};
+
+class ObjectTracker {
+ public:
+  ObjectTracker(const geometry::StereoCamera& camera, const ObjectTrackingOptions& options,
+                const std::vector<float>& scale_factors, LevelWeights weights);
+
+  // frame: keypoints with class labels and the tracked camera pose frame.T_c_w;
+  // instances: CV_32SC1 instance ids of the left image (0: none), empty: no masks this frame
+  // (clusters are still tracked from their matches); flow: CV_32FC2 optical flow from the
+  // previous frame to this one (NaN: none), or empty; up_w: the road normal in the world
+  // frame (planar link). Throws std::invalid_argument on wrong sizes or types.
+  ObjectTrackingReport track(const Frame& frame, const cv::Mat& instances, const cv::Mat& flow,
+                             const Vec3& up_w);
+
+  const std::vector<objects::ObjectTrack>& tracks() const { return tracks_; }
+  const std::vector<objects::ObjectCluster>& clusters() const { return clusters_; }
+  void reset();
+
+ private:
+  struct Match {
+    int point;
+    int keypoint;
+    int distance;  // Hamming bits
+  };
+  // Step 1: the cluster's points searched in the frame from their last observation (flow)
+  // or the predicted pose; fills the association evidence.
+  std::vector<Match> search_cluster(const objects::ObjectCluster& cluster, const Mat4& T_c_o,
+                                    const Frame& frame, const cv::Mat& instances,
+                                    const cv::Mat& flow,
+                                    objects::ClusterInstanceEvidence* evidence) const;
+  // Step 3's second pass: points not matched yet, projected with the estimated pose.
+  void refine_matches(const objects::ObjectCluster& cluster, const Mat4& T_c_o,
+                      const Frame& frame, int instance, std::vector<Match>* matches) const;
+  // Whether keypoint k may belong to a cluster associated with `instance` (-1: none).
+  bool keypoint_allowed(int k, int instance) const;
+  // Step 3 for one cluster; returns whether the twist was valid.
+  bool update_cluster(int c, const Frame& frame, std::vector<Match> matches, int instance,
+                      const Mat4& T_w_o_pred);
+  // Step 4: stereo keypoints of `instance` not claimed yet -> points of cluster c.
+  void add_points(int c, const Frame& frame, int instance);
+  // Stereo keypoints of `instance` no cluster claimed, in the world frame.
+  std::vector<std::pair<int, Vec3>> free_instance_points(const Frame& frame, int instance) const;
+  bool start_cluster(const Frame& frame, int instance, int class_id, const Vec3& up_w);
+  void cull(objects::ObjectCluster& cluster) const;
+  objects::TwistObservation observation(const objects::ObjectPoint& p, const Frame& frame,
+                                        int keypoint) const;
+
+  geometry::StereoCamera camera_;
+  ObjectTrackingOptions options_;
+  std::vector<float> scale_factors_;
+  LevelWeights weights_;
+  objects::TwistEstimationOptions lm_options_;
+
+  std::vector<objects::ObjectTrack> tracks_;
+  std::vector<objects::ObjectCluster> clusters_;  // clusters_[k] holds tracks_[k]'s points
+  int next_id_ = 0;
+  int last_frame_ = -1;
+  // per keypoint of the current frame
+  std::vector<int> instance_of_keypoint_;
+  std::vector<int> claimed_by_;  // cluster index or -1
+  std::unordered_set<int> assigned_instances_;  // instances associated with a cluster
+  std::map<int, int> instance_class_;           // instance -> majority class of its keypoints
+};
+
+}  // namespace twistslam::tracking

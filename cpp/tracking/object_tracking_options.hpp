@@ -1,0 +1,59 @@
+#pragma once
+// Options of the visual object tracking in the SLAM (paper sec. "Clusters creation" and
+// "Dynamic object tracking", eq. 1-4): which classes become object clusters, their link,
+// the flow-guided search, the twist LM and the cluster lifetime. The defaults and their
+// measured reasons are in python/twistslam/config_visual_objects.py (tests/python/test_config.py
+// checks they are equal key for key).
+#include <vector>
+
+namespace twistslam::tracking {
+
+struct ObjectTrackingOptions {
+  bool enabled = true;  // track the clusters of object_class_ids (needs instance masks)
+  // a-priori dynamic classes that form object clusters (Cityscapes: person 24, rider 25, car
+  // 26, truck 27, bus 28, caravan 29, trailer 30, train 31, motorcycle 32, bicycle 33)
+  std::vector<int> object_class_ids{24, 25, 26, 27, 28, 29, 30, 31, 32, 33};
+  // classes moving on the road: planar link (3 DoF); the other object classes are free
+  std::vector<int> planar_class_ids{26, 27, 28, 29, 30, 31, 32, 33};
+  int road_class_id = 7;            // the road cluster gives the planar link's normal
+  double flow_radius_px = 4;        // search window around the flow-predicted position
+  double projection_radius_px = 12; // ... around the motion-model projection (no flow)
+  double refine_radius_px = 3;      // ... of the second pass, around the estimated pose
+  int max_hamming = 50;             // bits
+  int min_new_cluster_points = 10;  // stereo keypoints inside a new instance mask
+  int min_shared_points = 5;        // matched points an instance must share with a cluster
+  double min_mask_overlap = 0.5;    // fraction of projected cluster points inside the mask
+  int min_inliers = 6;              // inliers of the twist LM for a tracked frame
+  int max_misses = 5;               // frames without a valid twist before the track ends
+  double max_point_spread_m = 4.0;  // new points farther from the cluster median are dropped
+  double max_depth_m = 60;          // stereo points farther than this never join a cluster
+  int max_points = 600;             // per cluster; the least often found are dropped first
+  double min_found_ratio = 0.25;    // points matched in fewer of the frames predicting them
+  int cull_after_visible = 5;       // ... are dropped once predicted this often
+  int lm_iterations = 10;           // LM iterations per pass
+};
+
+template <typename Visit>
+void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
+  visit("enabled", o.enabled, 0, 1);
+  visit("object_class_ids", o.object_class_ids, 0, 65535);  // 16-bit panoptic class ids
+  visit("planar_class_ids", o.planar_class_ids, 0, 65535);
+  visit("road_class_id", o.road_class_id, -1, 65535);  // -1: no road cluster
+  visit("flow_radius_px", o.flow_radius_px, 0.0, 2000.0);  // px: 2000 spans any image
+  visit("projection_radius_px", o.projection_radius_px, 0.0, 2000.0);
+  visit("refine_radius_px", o.refine_radius_px, 0.0, 2000.0);
+  visit("max_hamming", o.max_hamming, 0, 256);  // bits of a 256-bit descriptor
+  visit("min_new_cluster_points", o.min_new_cluster_points, 3, 100000);
+  visit("min_shared_points", o.min_shared_points, 1, 100000);
+  visit("min_mask_overlap", o.min_mask_overlap, 0.0, 1.0);
+  visit("min_inliers", o.min_inliers, 3, 100000);  // 3 points fix a rigid motion
+  visit("max_misses", o.max_misses, 0, 100000);
+  visit("max_point_spread_m", o.max_point_spread_m, 0.1, 1000.0);
+  visit("max_depth_m", o.max_depth_m, 0.5, 10000.0);
+  visit("max_points", o.max_points, 3, 1000000);
+  visit("min_found_ratio", o.min_found_ratio, 0.0, 1.0);
+  visit("cull_after_visible", o.cull_after_visible, 1, 100000);
+  visit("lm_iterations", o.lm_iterations, 1, 1000);
+}
+
+}  // namespace twistslam::tracking

@@ -1,0 +1,68 @@
+"""The ``visual_objects`` section of :class:`twistslam.Config`: visual tracking of every object
+cluster inside the SLAM (paper sec. "Clusters creation" and "Dynamic object tracking", eq. 1-4;
+C++ ``tracking::ObjectTrackingOptions``, cpp/tracking/object_tracker.hpp).
+
+It runs when the run has a segmentation source (``twistslam.run(..., segmentation=...)``):
+instances of ``object_class_ids`` become clusters with a pose per frame and a twist under their
+mechanical link, searched around their optical-flow-predicted positions. Values were chosen on
+simulated ``urban`` seed 0 (docs/visual_objects.md has the figures).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ._settings import param
+
+#: Cityscapes ids of the a-priori dynamic classes: person, rider, car, truck, bus, caravan,
+#: trailer, train, motorcycle, bicycle
+OBJECT_CLASSES = [24, 25, 26, 27, 28, 29, 30, 31, 32, 33]
+#: classes that move on the road: the planar link (TwistSLAM's vehicles)
+PLANAR_CLASSES = [26, 27, 28, 29, 30, 31, 32, 33]
+
+
+@dataclass
+class VisualObjectsConfig:
+    """Object clusters tracked by their keypoints (eq. 4) in the SLAM."""
+
+    enabled: bool = param(True, "track object clusters whenever the run has instance masks")
+    object_class_ids: list[int] = param(
+        list(OBJECT_CLASSES), "panoptic classes whose instances become object clusters "
+        "(a-priori dynamic; 'unknown' stays static, as in the paper)")
+    planar_class_ids: list[int] = param(
+        list(PLANAR_CLASSES), "object classes on the planar link (3 DoF on the road); "
+        "the others get the free link (6 DoF); [] makes every link free (ablation)")
+    road_class_id: int = param(7, "class of the road cluster that gives the planar normal; "
+                               "-1: none (the first camera's up)")
+    flow_radius_px: float = param(
+        4.0, "search window around the flow-predicted keypoint: DIS flow's error on the "
+        "simulator is 0.5 px median, 4 px keeps its tail", "px")
+    projection_radius_px: float = param(
+        12.0, "search window around the motion-model projection when a point has no flow "
+        "(first seen two frames ago, or no flow source)", "px")
+    refine_radius_px: float = param(
+        3.0, "second pass: window around the projection with the estimated twist", "px")
+    max_hamming: int = param(50, "ORB-SLAM2's matching threshold; cars show few, similar "
+                             "corners, the twist LM's Huber loss takes the rest", "bits")
+    min_new_cluster_points: int = param(
+        10, "stereo keypoints inside a new instance mask needed to start a cluster", "points")
+    min_shared_points: int = param(
+        5, "matched points an instance must share with a cluster to be associated", "points")
+    min_mask_overlap: float = param(
+        0.5, "else: fraction of the cluster's projected points inside the instance mask")
+    min_inliers: int = param(6, "inliers of the twist LM for a valid frame (3 fix a rigid "
+                             "motion; 6 leave a margin against a wrong minimal fit)", "points")
+    max_misses: int = param(5, "frames without a valid twist before the track ends "
+                            "(predicted meanwhile)", "frames")
+    max_point_spread_m: float = param(
+        4.0, "new points farther than this from the cluster's median point are dropped "
+        "(a car is <= 5.2 m long; masks bleed onto the background)", "m")
+    max_depth_m: float = param(
+        60.0, "stereo points beyond this never join a cluster: at 60 m a KITTI disparity of "
+        "6.5 px puts 1 px of error at 9 m of depth", "m")
+    max_points: int = param(600, "points per cluster (the least found are culled first)",
+                            "points")
+    min_found_ratio: float = param(
+        0.25, "points matched in fewer of the frames predicting them are culled (as map points)")
+    cull_after_visible: int = param(5, "... once predicted in this many frames", "frames")
+    lm_iterations: int = param(10, "Levenberg-Marquardt iterations per pass of eq. 4")

@@ -1,0 +1,139 @@
+"""The object clusters a SLAM run tracked (issue 10), as :class:`TrackedObject` rows and
+KITTI tracking boxes.
+
+A cluster's object frame is the one the core gave it at birth: world axes (identity rotation)
+at the centroid of its first points, so ``T_w_o`` is not a canonical box pose (detections give
+canonical frames with LiDAR fusion). Its box is fitted to its points in that frame: yaw about
+the frame's y axis (the first camera's "down") from the principal axis of the points' x-z
+coordinates, extents between the 5th and 95th percentile along each box axis (robust to the
+few background points a mask lets in). Reported frames are those with a valid twist (eq. 4).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..datasets import ObjectTable, write_tracking_results
+from .result import TrackedObject
+from .tracking import _image_size, _speed_kmh
+
+#: Cityscapes class id -> KITTI type written to the tracking results
+KITTI_TYPES = {24: "Pedestrian", 25: "Cyclist", 26: "Car", 27: "Truck", 28: "Misc", 29: "Van",
+               30: "Misc", 31: "Tram", 32: "Cyclist", 33: "Cyclist"}
+#: percentiles of the points along each box axis taken as the box's faces: 5 / 95 keeps a
+#: stray background point (a mask's edge) from stretching the box
+EXTENT_PERCENTILES = (5.0, 95.0)
+
+
+def box_from_points(points_o: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(T_o_box, size)`` of a cluster's points (M, 3) in its object frame: the box frame is
+    KITTI's (x = length, y = down, z = width), rotated about y; size = (l, w, h) in metres.
+    Fewer than 3 points give an identity pose and a zero size."""
+    T = np.eye(4)
+    if len(points_o) < 3:
+        return T, np.zeros(3)
+    xz = points_o[:, [0, 2]] - np.median(points_o[:, [0, 2]], axis=0)
+    _, vectors = np.linalg.eigh(xz.T @ xz)
+    dx, dz = vectors[:, -1]  # principal horizontal axis: the car's length
+    yaw = np.arctan2(-dz, dx)
+    c, s = np.cos(yaw), np.sin(yaw)
+    R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])  # R_y(yaw), as a KITTI box
+    local = points_o @ R  # coordinates along the box axes
+    lo, hi = np.percentile(local, EXTENT_PERCENTILES, axis=0)
+    T[:3, :3] = R
+    T[:3, 3] = R @ ((lo + hi) / 2)
+    extent = hi - lo
+    return T, np.array([extent[0], extent[2], extent[1]])
+
+
+@dataclass
+class VisualObjects:
+    """The object clusters of a run: ``objects`` (one :class:`TrackedObject` per cluster, its
+    ``T_w_o`` the cluster frame in the SLAM world), ``points_o`` (track id -> (M, 3) points in
+    that frame), ``T_o_box`` (track id -> the box fitted to them) and ``tracking`` (the
+    reported boxes in each frame's camera frame, KITTI tracking format rows)."""
+
+    objects: list[TrackedObject] = field(default_factory=list)
+    points_o: dict[int, np.ndarray] = field(default_factory=dict)
+    T_o_box: dict[int, np.ndarray] = field(default_factory=dict)
+    tracking: ObjectTable = field(default_factory=ObjectTable.empty)
+
+    def __len__(self) -> int:
+        return len(self.objects)
+
+    def __iter__(self):
+        return iter(self.objects)
+
+    def __getitem__(self, k: int) -> TrackedObject:
+        return self.objects[k]
+
+    def __repr__(self) -> str:
+        return f"VisualObjects({len(self)} clusters, {len(self.tracking)} boxes)"
+
+    def save(self, out_dir: str | Path, seq: str) -> dict[str, Path]:
+        """``tracking/SEQ.txt`` (KITTI tracking results) and ``object_points.npz`` (per track:
+        ``frames``, ``T_w_o``, ``points_o``, ``T_o_box``, ``size``)."""
+        out = Path(out_dir)
+        paths = {"tracking": out / "tracking" / f"{seq}.txt", "object_points": out / "object_points.npz"}
+        write_tracking_results(paths["tracking"], self.tracking)
+        arrays = {}
+        for o in self.objects:
+            arrays.update({f"{o.track_id}/frames": o.frames, f"{o.track_id}/T_w_o": o.T_w_o,
+                           f"{o.track_id}/size": o.size,
+                           f"{o.track_id}/points_o": self.points_o[o.track_id],
+                           f"{o.track_id}/T_o_box": self.T_o_box[o.track_id]})
+        np.savez_compressed(paths["object_points"], **arrays)
+        return paths
+
+
+def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.ndarray],
+                   period: float = 0.1) -> VisualObjects:
+    """Convert the core's clusters (``Slam.objects()``) with the run's camera poses
+    (frame -> T_w_c) into :class:`VisualObjects`."""
+    from .. import geometry
+
+    calib = getattr(sequence, "calib", None)
+    width, height = _image_size(sequence)
+    result = VisualObjects()
+    tables = []
+    for c in clusters:
+        frames = np.asarray(c["frames"])
+        T_w_o = np.asarray(c["T_w_o"]).reshape(-1, 4, 4)
+        points = np.asarray(c["points_o"]).reshape(-1, 3)
+        T_o_box, size = box_from_points(points)
+        cls = KITTI_TYPES.get(int(c["class_id"]), "Misc")
+        T_w_box = T_w_o @ T_o_box
+        reported = np.asarray(c["detected"], dtype=bool) & np.isin(frames, list(camera_poses))
+        track_id = int(c["id"])
+        result.points_o[track_id] = points
+        result.T_o_box[track_id] = T_o_box
+        result.objects.append(TrackedObject(
+            track_id=track_id, cls=cls, state=str(c["state"]), link=str(c["link"]), frames=frames,
+            T_w_o=T_w_o, size=size, velocity_kmh=_speed_kmh(T_w_box, period),
+            detected=np.asarray(c["detected"], dtype=bool), reported=reported,
+            score=np.zeros(len(frames)), mean_score=0.0, confidence=float(c["hits"]),
+            range=np.linalg.norm(T_w_box[:, :3, 3], axis=1)))
+        rows = np.flatnonzero(reported)
+        if not len(rows) or calib is None:
+            continue
+        T_c_box = np.stack([np.linalg.inv(camera_poses[int(f)]) for f in frames[rows]]) @ T_w_box[rows]
+        R = T_c_box[:, :3, :3]
+        ry = np.arctan2(R[:, 0, 2], R[:, 0, 0])
+        box_3d = np.column_stack([T_c_box[:, :3, 3], np.tile(size, (len(rows), 1)), ry])
+        box_2d = geometry.project_boxes(box_3d, calib.P2, width, height)
+        visible = np.isfinite(box_2d).all(axis=1) & (box_3d[:, 2] > 0)
+        n = int(visible.sum())
+        if not n:
+            continue
+        alpha = ry[visible] - np.arctan2(box_3d[visible, 0], box_3d[visible, 2])
+        tables.append(ObjectTable(
+            frame=frames[rows][visible], track_id=np.full(n, track_id), cls=np.full(n, cls),
+            truncation=np.full(n, -1.0), occlusion=np.full(n, -1),
+            alpha=np.arctan2(np.sin(alpha), np.cos(alpha)), box_2d=box_2d[visible],
+            box_3d=box_3d[visible], score=np.full(n, float(c["hits"]))))
+    if tables:
+        result.tracking = ObjectTable.concat(tables).sorted()
+    return result

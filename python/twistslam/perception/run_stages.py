@@ -1,0 +1,127 @@
+"""The perception stages of a run (:func:`twistslam.run`): which segmentation and flow source
+a sequence gets, from a name or a user's callable.
+
+``segmentation``: ``"auto"`` (the sequence's panoptic files when it has them, else masks from
+its 3D detections and LiDAR scans when it has both, else none), ``"files"``, ``"boxes"``,
+``"none"`` / ``None``, or any callable ``frame -> Panoptic | (class_id, instance_id)``.
+``flow``: ``"auto"`` (files when present, else OpenCV DIS), ``"files"``, ``"dis"``, ``"raft"``
+(needs ``flow_weights``), ``"none"`` / ``None``, or any callable ``(previous, current) ->
+(H, W, 2)``. Flow only serves object tracking: without segmentation no flow is computed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .flow import FLOW_KINDS, flow_source
+from .panoptic import Panoptic
+from .panoptic_source import check_panoptic, panoptic_source
+from .stage import check_flow
+
+SEGMENTATION_KINDS = ("auto", "files", "boxes", "none")
+
+
+def find_detections(sequence) -> Path | None:
+    """``<root>/detections/<name>/<seq>.txt`` beside the sequence's split folder (what the
+    simulator writes for its oracle and the shared real data for PointRCNN), the first
+    ``<name>`` in sorted order, or ``None``."""
+    base, seq = getattr(sequence, "base", None), getattr(sequence, "seq", None)
+    if base is None or seq is None:
+        return None
+    folder = Path(base).parent / "detections"
+    if not folder.is_dir():
+        return None
+    for source in sorted(p for p in folder.iterdir() if p.is_dir()):
+        if (source / f"{seq}.txt").is_file():
+            return source / f"{seq}.txt"
+    return None
+
+
+def _has_lidar(sequence) -> bool:
+    base, seq = getattr(sequence, "base", None), getattr(sequence, "seq", None)
+    return base is not None and (Path(base) / "velodyne" / str(seq)).is_dir()
+
+
+@dataclass
+class Perception:
+    """The stages a run uses. ``segmentation`` / ``flow`` are ``None`` when off; ``needs_lidar``:
+    the segmentation reads the frames' scans (masks from boxes)."""
+
+    segmentation: Callable[..., Any] | None = None
+    flow: Callable[..., np.ndarray] | None = None
+    segmentation_name: str = "none"
+    flow_name: str = "none"
+    needs_lidar: bool = False
+
+    def panoptic(self, frame) -> Panoptic | None:
+        if self.segmentation is None:
+            return None
+        shape = np.asarray(frame.image_left).shape[:2]
+        return check_panoptic(self.segmentation(frame), shape, self.segmentation_name)
+
+    def optical_flow(self, previous, current) -> np.ndarray | None:
+        if self.flow is None or previous is None:
+            return None
+        shape = np.asarray(current.image_left).shape[:2]
+        return np.ascontiguousarray(check_flow(self.flow(previous, current), shape, self.flow_name))
+
+
+def _segmentation(kind, sequence, detections) -> tuple[Callable | None, str, bool]:
+    if kind is None or kind == "none":
+        return None, "none", False
+    if callable(kind):
+        return kind, getattr(kind, "__name__", type(kind).__name__), False
+    if kind not in SEGMENTATION_KINDS:
+        raise ValueError(f"segmentation '{kind}': expected one of {', '.join(SEGMENTATION_KINDS)} "
+                         "or a callable frame -> Panoptic")
+    if kind == "auto":
+        try:
+            return panoptic_source("files", sequence), "files", False
+        except FileNotFoundError:
+            pass
+        if detections is None:
+            detections = find_detections(sequence)
+        if detections is None or not _has_lidar(sequence):
+            return None, "none", False
+        kind = "boxes"
+    if kind == "files":
+        return panoptic_source("files", sequence), "files", False
+    from ..objects.detections_input import load_detections
+
+    if detections is None:
+        detections = find_detections(sequence)
+    if detections is None:
+        raise FileNotFoundError(f"segmentation 'boxes': {sequence} has no detections/<name>/"
+                                f"{getattr(sequence, 'seq', '')}.txt; pass detections=")
+    table = load_detections(detections, str(getattr(sequence, "seq", "")), len(sequence))
+    return panoptic_source("boxes", sequence, boxes=table), "boxes", True
+
+
+def perception_stages(sequence, segmentation: Any = "auto", flow: Any = "auto", *,
+                      detections: Any = None, flow_weights: str | Path | None = None) -> Perception:
+    """The segmentation and flow stages for ``sequence`` (see the module docstring).
+
+    Raises
+    ------
+    ValueError
+        An unknown source name.
+    FileNotFoundError
+        "files" without files, "boxes" without detections, "raft" without weights.
+    """
+    seg, seg_name, needs_lidar = _segmentation(segmentation, sequence, detections)
+    if seg is None or flow is None or flow == "none":
+        return Perception(seg, None, seg_name, "none", needs_lidar)
+    if callable(flow):
+        return Perception(seg, flow, seg_name, getattr(flow, "__name__", type(flow).__name__),
+                          needs_lidar)
+    if flow not in FLOW_KINDS:
+        raise ValueError(f"flow '{flow}': expected one of {', '.join(FLOW_KINDS)}, 'none' "
+                         "or a callable (previous, current) -> (H, W, 2)")
+    stage = flow_source(flow, sequence, weights=flow_weights)
+    name = type(stage).__name__.replace("Flow", "").lower() or flow
+    return Perception(seg, stage, seg_name, name, needs_lidar)
