@@ -22,6 +22,7 @@ struct ObjectPoint {
   Vec3 X_o = Vec3::Zero();  // in the object frame (moves with the object)
   map::Descriptor descriptor{};
   ObjectPointObservation last;  // the latest observation (flow-guided search starts here)
+  std::vector<ObjectPointObservation> history;  // the latest ones, oldest first (window BA)
   int visible = 1;              // frames in which it was predicted inside the image
   int found = 1;                // frames in which it was matched and an inlier
   LabelVotes class_votes;       // classes of its 2D observations (S3LAM-style vote)

@@ -10,6 +10,7 @@
 #include "geometry/se3.hpp"
 #include "objects/instance_association.hpp"
 #include "objects/motion_model.hpp"
+#include "optim/visual_object_window.hpp"
 
 namespace twistslam::tracking {
 namespace {
@@ -39,6 +40,13 @@ bool flow_at(const cv::Mat& flow, const Vec2& uv, Vec2* out) {
   return true;
 }
 
+// The point's latest observation, also appended to its bounded history (window BA).
+void observe(objects::ObjectPoint& p, const objects::ObjectPointObservation& o, int window) {
+  p.last = o;
+  p.history.push_back(o);
+  if (static_cast<int>(p.history.size()) > std::max(window, 1)) p.history.erase(p.history.begin());
+}
+
 Vec3 transform(const Mat4& T, const Vec3& X) {
   return T.topLeftCorner<3, 3>() * X + T.topRightCorner<3, 1>();
 }
@@ -60,6 +68,7 @@ ObjectTracker::ObjectTracker(const geometry::StereoCamera& camera,
 void ObjectTracker::reset() {
   tracks_.clear();
   clusters_.clear();
+  T_c_w_of_frame_.clear();
   next_id_ = 0;
   last_frame_ = -1;
 }
@@ -215,14 +224,15 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
       if (!est.inlier[j]) continue;
       const Match& m = matches[j];
       objects::ObjectPoint& p = cluster.points[m.point];
-      p.last = {frame.index, frame.keypoints.uv[m.keypoint], frame.keypoints.u_right[m.keypoint],
-                frame.keypoints.octave[m.keypoint]};
+      observe(p, {frame.index, frame.keypoints.uv[m.keypoint], frame.keypoints.u_right[m.keypoint],
+                  frame.keypoints.octave[m.keypoint]}, options_.window_frames);
       p.descriptor = frame.keypoints.descriptors[m.keypoint];
       p.class_votes.add(frame.keypoints.label[m.keypoint]);
       ++p.found;
       claimed_by_[m.keypoint] = c;
     }
   }
+  if (valid && options_.window_frames >= 3) refine_window(c);
   if (instance >= 0) {
     cluster.instance = instance;
     const auto cls = instance_class_.find(instance);
@@ -276,7 +286,8 @@ void ObjectTracker::add_points(int c, const Frame& frame, int instance) {
     p.X_o = transform(T_o_w, X_w);
     if ((p.X_o - centre).norm() > options_.max_point_spread_m) continue;
     p.descriptor = frame.keypoints.descriptors[k];
-    p.last = {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]};
+    observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
+            options_.window_frames);
     p.class_votes.add(frame.keypoints.label[k]);
     cluster.points.push_back(p);
     claimed_by_[k] = c;
@@ -323,7 +334,8 @@ bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id
     objects::ObjectPoint p;
     p.X_o = X_w - centroid;
     p.descriptor = frame.keypoints.descriptors[k];
-    p.last = {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]};
+    observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
+            options_.window_frames);
     p.class_votes.add(frame.keypoints.label[k]);
     cluster.points.push_back(p);
     claimed_by_[k] = c;
@@ -331,6 +343,45 @@ bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id
   tracks_.push_back(std::move(track));
   clusters_.push_back(std::move(cluster));
   return true;
+}
+
+void ObjectTracker::refine_window(int c) {
+  objects::ObjectTrack& track = tracks_[c];
+  objects::ObjectCluster& cluster = clusters_[c];
+  const int rows = std::min<int>(options_.window_frames, static_cast<int>(track.frames.size()));
+  if (rows < 3) return;
+  const int first = static_cast<int>(track.frames.size()) - rows;
+  optim::VisualObjectWindow w;
+  for (int r = first; r < first + rows; ++r) {
+    const auto cam = T_c_w_of_frame_.find(track.frames[r].frame);
+    if (cam == T_c_w_of_frame_.end()) return;  // a frame without a camera pose (lost)
+    w.T_c_w.push_back(cam->second);
+    w.T_w_o.push_back(track.frames[r].T_w_o);
+  }
+  const int first_frame = track.frames[first].frame;
+  std::vector<int> used;  // cluster point index per window point
+  for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) {
+    const objects::ObjectPoint& p = cluster.points[i];
+    bool any = false;
+    for (const auto& o : p.history) {
+      const int f = o.frame - first_frame;
+      if (f < 0 || f >= rows) continue;
+      if (!any) used.push_back(i), w.X_o.push_back(p.X_o), any = true;
+      w.observations.push_back({f, static_cast<int>(w.X_o.size()) - 1, o.uv, o.u_right,
+                                weights_.at(o.octave)});
+    }
+  }
+  optim::VisualObjectWindowOptions wo;
+  wo.use_const = options_.use_const;
+  wo.const_sigma_translation = options_.const_sigma_translation;
+  wo.const_sigma_rotation = options_.const_sigma_rotation;
+  wo.max_iterations = options_.window_iterations;
+  if (!optim::refine_visual_object_window(camera_, w, track.Pi, wo).usable) return;
+  for (int r = 1; r < rows; ++r) track.frames[first + r].T_w_o = w.T_w_o[r];
+  for (int r = 0; r + 1 < rows; ++r)  // eq. 2: the twist linking consecutive poses
+    track.frames[first + r].xi = track.Pi * geometry::twist_between(w.T_w_o[r], w.T_w_o[r + 1]);
+  cluster.velocity = track.frames[first + rows - 2].xi;
+  for (size_t k = 0; k < used.size(); ++k) cluster.points[used[k]].X_o = w.X_o[k];
 }
 
 void ObjectTracker::cull(objects::ObjectCluster& cluster) const {
@@ -354,6 +405,9 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
                         flow.rows != camera_.height))
     throw std::invalid_argument("flow: expected float32 (u, v) per pixel of the image size");
 
+  T_c_w_of_frame_[frame.index] = frame.T_c_w;
+  while (static_cast<int>(T_c_w_of_frame_.size()) > std::max(options_.window_frames, 2) + 1)
+    T_c_w_of_frame_.erase(T_c_w_of_frame_.begin());
   const size_t n = frame.keypoints.size();
   instance_of_keypoint_.assign(n, 0);
   if (!instances.empty())

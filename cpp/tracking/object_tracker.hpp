@@ -82,6 +82,8 @@ class ObjectTracker {
   std::vector<std::pair<int, Vec3>> free_instance_points(const Frame& frame, int instance) const;
   bool start_cluster(const Frame& frame, int instance, int class_id, const Vec3& up_w);
   void cull(objects::ObjectCluster& cluster) const;
+  // e_dyna + e_const over the cluster's last window_frames frames (eq. 9), camera fixed.
+  void refine_window(int c);
   objects::TwistObservation observation(const objects::ObjectPoint& p, const Frame& frame,
                                         int keypoint) const;
 
@@ -93,6 +95,7 @@ class ObjectTracker {
 
   std::vector<objects::ObjectTrack> tracks_;
   std::vector<objects::ObjectCluster> clusters_;  // clusters_[k] holds tracks_[k]'s points
+  std::map<int, Mat4> T_c_w_of_frame_;  // camera poses of the recent frames (window)
   int next_id_ = 0;
   int last_frame_ = -1;
   // per keypoint of the current frame

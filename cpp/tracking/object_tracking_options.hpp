@@ -31,6 +31,11 @@ struct ObjectTrackingOptions {
   double min_found_ratio = 0.25;    // points matched in fewer of the frames predicting them
   int cull_after_visible = 5;       // ... are dropped once predicted this often
   int lm_iterations = 10;           // LM iterations per pass
+  int window_frames = 5;            // sliding window of e_dyna + e_const (0: off)
+  bool use_const = true;            // e_const in the window
+  double const_sigma_translation = 0.05;  // m/frame, change of the translational twist
+  double const_sigma_rotation = 0.005;    // rad/frame, change of the rotational twist
+  int window_iterations = 5;        // Ceres iterations of the window
 };
 
 template <typename Visit>
@@ -54,6 +59,11 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("min_found_ratio", o.min_found_ratio, 0.0, 1.0);
   visit("cull_after_visible", o.cull_after_visible, 1, 100000);
   visit("lm_iterations", o.lm_iterations, 1, 1000);
+  visit("window_frames", o.window_frames, 0, 100);  // frames: 100 is a BA of seconds per frame
+  visit("use_const", o.use_const, 0, 1);
+  visit("const_sigma_translation", o.const_sigma_translation, 1e-6, 100.0);
+  visit("const_sigma_rotation", o.const_sigma_rotation, 1e-6, 10.0);
+  visit("window_iterations", o.window_iterations, 1, 1000);
 }
 
 }  // namespace twistslam::tracking

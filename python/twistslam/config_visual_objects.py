@@ -66,3 +66,12 @@ class VisualObjectsConfig:
         0.25, "points matched in fewer of the frames predicting them are culled (as map points)")
     cull_after_visible: int = param(5, "... once predicted in this many frames", "frames")
     lm_iterations: int = param(10, "Levenberg-Marquardt iterations per pass of eq. 4")
+    window_frames: int = param(
+        5, "frames of the sliding window that refines the cluster's poses and points with "
+        "e_dyna + e_const (eq. 9) after each frame; < 3: off", "frames", lo=0, hi=100)
+    use_const: bool = param(True, "e_const in the window (ablation: False)")
+    const_sigma_translation: float = param(
+        0.05, "change of the translational twist between frames: 0.5 m/s^2 at 10 Hz", "m/frame")
+    const_sigma_rotation: float = param(
+        0.005, "change of the rotational twist between frames (0.3 deg/frame)", "rad/frame")
+    window_iterations: int = param(5, "Ceres iterations of the window (from a close start)")

@@ -49,10 +49,13 @@ class FakeSystem:
         self.nan_when_lost = False
         FakeSystem.instances.append(self)
 
-    def track(self, index, timestamp, image_left, image_right, labels, points_c=None):
+    def track(self, index, timestamp, image_left, image_right, labels, points_c=None,
+              instances=None, flow=None):
         self.calls.append(dict(index=index, timestamp=timestamp, shape=image_left.shape,
                                labels=None if labels is None else labels.copy(),
-                               points_c=None if points_c is None else points_c.shape))
+                               points_c=None if points_c is None else points_c.shape,
+                               instances=None if instances is None else instances.copy(),
+                               flow=None if flow is None else flow.shape))
         blank = image_left.min() == image_left.max() or image_right.min() == image_right.max()
         if blank:
             status = "lost"
@@ -80,6 +83,9 @@ class FakeSystem:
     def map_points(self):
         return {"X_w": np.zeros((3, 3)), "cluster_id": np.zeros(3, np.int64),
                 "num_observations": np.full(3, 2)}
+
+    def objects(self):
+        return []
 
     def reset(self):
         self.calls.clear()

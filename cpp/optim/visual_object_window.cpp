@@ -1,0 +1,70 @@
+#include "optim/visual_object_window.hpp"
+
+#include "geometry/se3.hpp"
+#include "optim/problem_builder.hpp"
+
+namespace twistslam::optim {
+
+VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCamera& camera,
+                                                      VisualObjectWindow& w, const Mat6& Pi,
+                                                      const VisualObjectWindowOptions& o) {
+  VisualObjectWindowSummary out;
+  const int n = static_cast<int>(w.T_w_o.size());
+  if (n < 2 || static_cast<int>(w.T_c_w.size()) != n || w.num_fixed_frames >= n) return out;
+  // Solved in the world translated to the first object position (as optimize_object_window):
+  // a world twist's v is the velocity of the point at the origin, so far from the origin
+  // e_const's translation sigma would also weigh rotation by the distance. A translation
+  // keeps the free and planar sub-spaces, so Pi is unchanged.
+  const Vec3 c = w.T_w_o.front().topRightCorner<3, 1>();
+  Mat4 S = Mat4::Identity();  // T_local_w
+  S.topRightCorner<3, 1>() = -c;
+  const Mat4 S_inv = geometry::se3_inverse(S);
+
+  detail::ProblemBuilder b;
+  b.reserve(7 * 2 * n + 3 * static_cast<int>(w.X_o.size()));
+  std::vector<int> camera_block(n), object_block(n), point_block(w.X_o.size(), -1);
+  for (int i = 0; i < n; ++i) {
+    camera_block[i] = b.add_pose(w.T_c_w[i] * S_inv, /*fixed=*/true);
+    object_block[i] = b.add_pose(S * w.T_w_o[i], /*fixed=*/i < w.num_fixed_frames);
+  }
+  std::vector<int> seen(w.X_o.size(), 0);
+  for (const auto& obs : w.observations) ++seen[obs.point];
+  for (size_t p = 0; p < w.X_o.size(); ++p)
+    if (seen[p] > 0) point_block[p] = b.add_point(w.X_o[p], !o.refine_points);
+  // e_dyna (eq. 9)
+  for (const auto& obs : w.observations) {
+    const double huber = obs.u_right >= 0 ? o.huber_stereo : o.huber_mono;
+    b.add_dynamic_reprojection(camera_block[obs.frame], object_block[obs.frame],
+                               point_block[obs.point], camera, obs.uv, obs.u_right,
+                               obs.inv_sigma2, huber, o.min_depth);
+  }
+  for (int i = 0; i + 1 < n; ++i) {
+    const bool both_fixed = i + 1 < w.num_fixed_frames;
+    if (o.use_link && !both_fixed)
+      b.add_link(object_block[i], object_block[i + 1], Pi, o.link_sigma_translation,
+                 o.link_sigma_rotation);
+    if (o.use_const && i >= 1 && i + 1 >= w.num_fixed_frames)
+      b.add_constant_velocity(object_block[i - 1], object_block[i], object_block[i + 1], Pi,
+                              o.const_sigma_translation, o.const_sigma_rotation, o.huber_const);
+  }
+  out.num_residuals = b.num_residuals();
+  if (out.num_residuals == 0) return out;
+  detail::SolveOptions so;
+  so.max_iterations = o.max_iterations;
+  so.num_threads = 1;
+  so.linear_solver_override = ceres::DENSE_SCHUR;  // a few poses, points eliminated
+  so.initial_trust_region_radius = 1e4;
+  const detail::SolveSummary s = b.solve(so);
+  out.usable = s.usable;
+  out.iterations = s.iterations;
+  out.initial_cost = s.initial_cost;
+  out.final_cost = s.final_cost;
+  if (!out.usable) return out;
+  for (int i = w.num_fixed_frames; i < n; ++i) w.T_w_o[i] = S_inv * b.pose(object_block[i]);
+  if (o.refine_points)
+    for (size_t p = 0; p < w.X_o.size(); ++p)
+      if (point_block[p] >= 0) w.X_o[p] = b.point(point_block[p]);
+  return out;
+}
+
+}  // namespace twistslam::optim

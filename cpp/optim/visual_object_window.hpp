@@ -1,0 +1,61 @@
+#pragma once
+// Sliding-window refinement of one object cluster from its keypoints (paper eq. 9, the object
+// terms of the local BA): the poses T_w_o of its last N frames and its points X_o, with the
+// camera poses of those frames held fixed, refined by
+//   e_dyna   reprojection of X_c = T_c_w T_w_o X_o against each observation (stereo or mono);
+//   e_const  constant velocity Pi (xi~_{i+1} - xi~_i) over three consecutive poses;
+//   e_link   (I - Pi) xi~_i, the motion the mechanical link forbids (a stiff prior),
+// each a cost family of the ProblemBuilder (the ones the full BA and the detections
+// tracker's window use). Frame-to-frame twists (eq. 4) are noisy where a car shows few
+// corners; e_const is what smooths them (TwistSLAM). Public header: Eigen and std only.
+#include <vector>
+
+#include "geometry/stereo_camera.hpp"
+#include "geometry/types.hpp"
+
+namespace twistslam::optim {
+
+struct VisualObjectObservation {
+  int frame = 0;          // index into the window's frames
+  int point = 0;          // index into the points
+  Vec2 uv = Vec2::Zero(); // px, left image
+  double u_right = -1;    // px; < 0: mono
+  double inv_sigma2 = 1;  // pyramid level weight
+};
+
+struct VisualObjectWindow {
+  std::vector<Mat4> T_c_w;   // camera pose per frame (fixed)
+  std::vector<Mat4> T_w_o;   // object pose per frame, consecutive frames; refined in place
+  std::vector<Vec3> X_o;     // points in the object frame; refined in place
+  std::vector<VisualObjectObservation> observations;
+  int num_fixed_frames = 1;  // leading poses held fixed (the gauge and the past)
+};
+
+struct VisualObjectWindowOptions {
+  double huber_stereo = 2.796;           // px, sqrt(chi2 3 dof 95 %) as the BA
+  double huber_mono = 2.448;             // px, sqrt(chi2 2 dof 95 %)
+  double const_sigma_translation = 0.05; // m/frame, change of the translational twist
+  double const_sigma_rotation = 0.005;   // rad/frame, change of the rotational twist
+  double link_sigma_translation = 0.01;  // m/frame, out-of-link motion allowed
+  double link_sigma_rotation = 0.002;    // rad/frame
+  double huber_const = 3.0;              // sigmas
+  bool use_const = true;
+  bool use_link = true;
+  bool refine_points = true;
+  int max_iterations = 5;
+  double min_depth = 0.1;                // m
+};
+
+struct VisualObjectWindowSummary {
+  bool usable = false;
+  int iterations = 0;
+  int num_residuals = 0;
+  double initial_cost = 0, final_cost = 0;
+};
+
+// Pi: the link's projector. Fewer than two frames or no free pose: nothing is done.
+VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCamera& camera,
+                                                      VisualObjectWindow& window, const Mat6& Pi,
+                                                      const VisualObjectWindowOptions& options);
+
+}  // namespace twistslam::optim
