@@ -67,6 +67,7 @@ def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | Non
     computed, in a background thread while the caller tracks frame i (the PNG decoder, OpenCV
     and the core all release the GIL)."""
     previous: list[Frame | None] = [None]
+    first_shape: list[tuple[int, int] | None] = [None]
 
     def load(i: int) -> _Loaded:
         start = time.perf_counter()
@@ -75,10 +76,16 @@ def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | Non
         class_ids = labels.read(i) if labels is not None else None
         ms = {"load": (time.perf_counter() - start) * 1e3}
         instance_ids = flow = None
+        shape = np.asarray(frame.image_left).shape[:2] if frame.image_left is not None else None
+        if first_shape[0] is None:
+            first_shape[0] = shape
+        if shape != first_shape[0]:  # a resized frame: Slam.track names it, no stage runs
+            return _Loaded(frame, None, None, None, ms)
         if perception.segmentation is not None:
             start = time.perf_counter()
             panoptic = perception.panoptic(frame)
-            class_ids, instance_ids = panoptic.class_id, panoptic.instance_id
+            if panoptic is not None:
+                class_ids, instance_ids = panoptic.class_id, panoptic.instance_id
             ms["segmentation"] = (time.perf_counter() - start) * 1e3
         if perception.flow is not None:
             start = time.perf_counter()
@@ -155,6 +162,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     check_stereo(sequence)
     indices = frame_range(config, len(sequence))
     check_first_frames(sequence, indices)  # resized images, identical or swapped cameras
+    if isinstance(segmentation, str) and segmentation == "auto" and not config.run.use_labels:
+        segmentation = "none"
     perception = perception_stages(sequence, segmentation, flow, detections=detections,
                                    flow_weights=flow_weights)
     if (perception.segmentation is not None and config.visual_objects.enabled
@@ -214,7 +223,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         map_points=slam.map_points(),
         config=config,
         seq=name,
-        objects=visual_objects(slam.objects(), sequence, camera_poses, period=_period(sequence)),
+        objects=(visual_objects(slam.objects(), sequence, camera_poses, period=_period(sequence))
+                 if perception.segmentation is not None else None),
         segmentation=perception.segmentation_name,
         flow=perception.flow_name,
     )

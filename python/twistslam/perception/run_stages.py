@@ -59,10 +59,19 @@ class Perception:
     needs_lidar: bool = False
 
     def panoptic(self, frame) -> Panoptic | None:
+        """The frame's labels; ``None`` when off, or when a file source has no file for this
+        frame (the frame is tracked without masks: clusters keep their tracks from their
+        matched points, camera tracking uses every keypoint)."""
         if self.segmentation is None:
             return None
         shape = np.asarray(frame.image_left).shape[:2]
-        return check_panoptic(self.segmentation(frame), shape, self.segmentation_name)
+        try:
+            result = self.segmentation(frame)
+        except FileNotFoundError:
+            if self.segmentation_name != "files":
+                raise
+            return None
+        return check_panoptic(result, shape, self.segmentation_name)
 
     def optical_flow(self, previous, current) -> np.ndarray | None:
         if self.flow is None or previous is None:
