@@ -1,0 +1,94 @@
+"""Visual object tracking in the SLAM (issue 10) end to end on a short simulated sequence:
+clusters from the simulator's panoptic files, searched along its exact flow, against the
+simulator's object poses."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+import pytest
+
+import twistslam
+from twistslam.datasets import KittiTracking, read_tracking_results
+from twistslam.eval.object_tracks import evaluate_object_tracks, load_ground_truth
+from twistslam.objects.visual import box_from_points
+from twistslam.perception.run_stages import perception_stages
+from twistslam.sim import generate
+
+FRAMES = 15
+
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory):
+    root = tmp_path_factory.mktemp("visual_objects")
+    generate(root, "urban", frames=FRAMES, seed=0, progress=False, overwrite=True)
+    return root
+
+
+@pytest.fixture(scope="module")
+def result(sim):
+    return twistslam.run(KittiTracking(sim, "0000"), progress=False, segmentation="files",
+                         flow="files")
+
+
+def reported(objects):
+    return [dataclasses.replace(o, frames=o.frames[o.reported], T_w_o=o.T_w_o[o.reported])
+            for o in objects if o.reported.any()]
+
+
+def test_cars_are_tracked_with_accurate_motion(sim, result):
+    assert result.segmentation == "files" and result.flow == "file"
+    assert len(result.objects) >= 2
+    gt = load_ground_truth(sim, "0000")
+    ev = evaluate_object_tracks(reported(result.objects), result.camera_poses, gt,
+                                min_frames=10)
+    ahead = {row.gt_id: row for row in ev.cars}[4]  # the car ahead in the ego lane
+    # measured: coverage 1.0, RPE 0.05 m/m and ~0.6 deg/m over these 15 frames
+    assert ahead.coverage >= 0.9
+    assert ahead.rpe_t < 0.15 and ahead.rpe_r < 2.0 and ahead.ate_aligned < 0.3
+    assert ev.n_ghosts == 0
+    # stage times are reported apart from the core's
+    assert {"segmentation", "flow", "objects"} <= set(result.timings.stages)
+
+
+def test_objects_are_written_in_the_kitti_tracking_format(result, tmp_path):
+    paths = result.save(tmp_path / "res")
+    table = read_tracking_results(paths["tracking"])
+    assert len(table) > 0 and (table.box_3d[:, 3:6] > 0).all()
+    assert set(table.cls) <= {"Car", "Pedestrian", "Cyclist", "Truck", "Van", "Tram", "Misc"}
+    points = np.load(paths["object_points"])
+    assert any(k.endswith("/points_o") and len(points[k]) >= 10 for k in points.files)
+
+
+def test_no_segmentation_no_objects(sim):
+    r = twistslam.run(KittiTracking(sim, "0000"), {"run": {"max_frames": 3}}, progress=False,
+                      segmentation="none")
+    assert r.objects is None and r.segmentation == "none" and r.flow == "none"
+
+
+def test_stage_names_are_checked(sim):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        seq = KittiTracking(sim, "0000")
+    with pytest.raises(ValueError, match="segmentation 'maskrcnn'"):
+        perception_stages(seq, "maskrcnn")
+    with pytest.raises(ValueError, match="flow 'farneback'"):
+        perception_stages(seq, "files", "farneback")
+    # a user's own stage plugs in as a callable
+    p = perception_stages(seq, lambda frame: (np.zeros((2, 2), int), np.zeros((2, 2), int)), None)
+    assert p.segmentation is not None and p.flow is None
+
+
+def test_box_from_points_recovers_a_turned_box():
+    rng = np.random.default_rng(0)
+    l, w, h, yaw = 4.2, 1.8, 1.5, np.radians(30)
+    local = rng.uniform(-0.5, 0.5, (4000, 3)) * [l, h, w]  # x = length, y = height, z = width
+    c, s = np.cos(yaw), np.sin(yaw)
+    R = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    T, size = box_from_points(local @ R.T + [1.0, 0.2, -0.5])
+    assert np.allclose(size, [l, w, h], rtol=0.12)
+    angle = np.arctan2(T[0, 2], T[0, 0])
+    assert abs(np.sin(angle - yaw)) < np.sin(np.radians(3))  # yaw modulo pi
+    assert np.allclose(T[:3, 3], [1.0, 0.2, -0.5], atol=0.1)
