@@ -1,0 +1,382 @@
+// Visual object tracking in the SLAM (ObjectTracker, paper eq. 4) on synthetic stereo frames:
+// keypoints are exact projections of a rigid car-like cluster moving on the road plane in
+// front of a static camera, with per-frame panoptic instance ids that change every frame, so
+// the tracker must associate instances with its cluster through the matched points.
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "common/kitti_camera.hpp"
+#include "geometry/se3.hpp"
+#include "geometry/so3.hpp"
+#include "tracking/object_tracker.hpp"
+
+using namespace twistslam;
+
+namespace {
+
+const geometry::StereoCamera kCamera = test_scenes::kitti_camera();
+const Vec3 kUp(0, -1, 0);
+constexpr int kCar = 26, kRoad = 7;
+
+map::Descriptor random_descriptor(std::mt19937& rng) {
+  map::Descriptor d;
+  std::uniform_int_distribution<int> byte(0, 255);
+  for (auto& b : d) b = static_cast<std::uint8_t>(byte(rng));
+  return d;
+}
+
+// A rigid object: points in its own frame, a descriptor each, pose P_i = (R(yaw_i), c_i) in
+// the world with planar motion about kUp.
+struct Car {
+  std::vector<Vec3> X_o;
+  std::vector<map::Descriptor> descriptors;
+  Vec3 c0 = Vec3::Zero();
+  Vec3 velocity = Vec3::Zero();  // m/frame, world
+  double yaw_rate = 0;           // rad/frame about kUp
+  int label = kCar;
+
+  Mat4 pose(int i) const {
+    return geometry::make_pose(geometry::so3_exp(kUp * (yaw_rate * i)), c0 + velocity * i);
+  }
+  // True world-frame motion from frame i to i + 1: P_{i+1} P_i^-1.
+  Mat4 motion(int i) const { return pose(i + 1) * geometry::se3_inverse(pose(i)); }
+};
+
+Car make_car(std::mt19937& rng, const Vec3& c0, const Vec3& velocity, double yaw_rate,
+             int n = 80) {
+  Car car;
+  car.c0 = c0;
+  car.velocity = velocity;
+  car.yaw_rate = yaw_rate;
+  std::uniform_real_distribution<double> x(-2.0, 2.0), y(-0.75, 0.75), z(-0.9, 0.9);
+  for (int k = 0; k < n; ++k) {
+    car.X_o.emplace_back(x(rng), y(rng), z(rng));
+    car.descriptors.push_back(random_descriptor(rng));
+  }
+  return car;
+}
+
+struct Background {
+  std::vector<Vec3> X_w;
+  std::vector<map::Descriptor> descriptors;
+};
+
+Background make_background(std::mt19937& rng, int n = 50) {
+  Background b;
+  std::uniform_real_distribution<double> u(5, kCamera.width - 6.0), v(5, kCamera.height - 6.0),
+      depth(30, 50);
+  for (int k = 0; k < n; ++k) {
+    b.X_w.push_back(kCamera.backproject(Vec2(u(rng), v(rng)), depth(rng)));
+    b.descriptors.push_back(random_descriptor(rng));
+  }
+  return b;
+}
+
+// A frame under construction, camera at the world origin (T_c_w = I).
+struct SceneFrame {
+  tracking::Frame frame;
+  cv::Mat instances;  // CV_32SC1, 0 = none
+  cv::Mat flow;       // CV_32FC2, NaN where unknown (filled at the car's keypoints)
+
+  explicit SceneFrame(int index) {
+    frame.index = index;
+    frame.timestamp = 0.1 * index;
+    instances = cv::Mat::zeros(kCamera.height, kCamera.width, CV_32SC1);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    flow = cv::Mat(kCamera.height, kCamera.width, CV_32FC2, cv::Scalar(nan, nan));
+  }
+
+  // Adds the stereo keypoint of X_c; false when it falls outside the image.
+  bool add_point(const Vec3& X_c, const map::Descriptor& d, int label, int octave) {
+    const Vec2 uv = kCamera.project(X_c);
+    if (X_c.z() <= 0.5 || !kCamera.in_image(uv, 1.0)) return false;
+    auto& k = frame.keypoints;
+    k.uv.push_back(uv);
+    k.octave.push_back(octave);
+    k.u_right.push_back(kCamera.project_right(X_c).x());
+    k.depth.push_back(X_c.z() + kCamera.t_left.z());
+    k.descriptors.push_back(d);
+    k.label.push_back(label);
+    frame.usable.push_back(label == kRoad);
+    return true;
+  }
+
+  void add_background(const Background& b) {
+    for (size_t k = 0; k < b.X_w.size(); ++k) add_point(b.X_w[k], b.descriptors[k], kRoad, 0);
+  }
+
+  // The car's keypoints in frame i; its bounding rectangle filled with `instance` (0: no mask);
+  // the flow from frame i - 1 at its keypoints of frame i - 1.
+  void add_car(const Car& car, int i, int instance) {
+    const Mat4 P = car.pose(i), P_prev = car.pose(i - 1);
+    double u0 = 1e9, v0 = 1e9, u1 = -1e9, v1 = -1e9;
+    for (size_t k = 0; k < car.X_o.size(); ++k) {
+      const Vec3 X = P.topLeftCorner<3, 3>() * car.X_o[k] + P.topRightCorner<3, 1>();
+      if (!add_point(X, car.descriptors[k], car.label, static_cast<int>(k % 3))) continue;
+      const Vec2 uv = frame.keypoints.uv.back();
+      u0 = std::min(u0, uv.x()), v0 = std::min(v0, uv.y());
+      u1 = std::max(u1, uv.x()), v1 = std::max(v1, uv.y());
+      const Vec3 X_prev = P_prev.topLeftCorner<3, 3>() * car.X_o[k] + P_prev.topRightCorner<3, 1>();
+      const Vec2 uv_prev = kCamera.project(X_prev);
+      const Vec2 f = uv - uv_prev;
+      // the 2 x 2 pixels around the previous position carry this point's flow (bilinear reads)
+      for (int dy = 0; dy <= 1; ++dy)
+        for (int dx = 0; dx <= 1; ++dx) {
+          const int x = static_cast<int>(std::floor(uv_prev.x())) + dx;
+          const int y = static_cast<int>(std::floor(uv_prev.y())) + dy;
+          if (x >= 0 && y >= 0 && x < flow.cols && y < flow.rows)
+            flow.at<cv::Vec2f>(y, x) = cv::Vec2f(static_cast<float>(f.x()), static_cast<float>(f.y()));
+        }
+    }
+    if (instance > 0 && u1 >= u0) {
+      const cv::Rect box(cv::Point(static_cast<int>(std::floor(u0)) - 2, static_cast<int>(std::floor(v0)) - 2),
+                         cv::Point(static_cast<int>(std::ceil(u1)) + 3, static_cast<int>(std::ceil(v1)) + 3));
+      instances(box & cv::Rect(0, 0, instances.cols, instances.rows)).setTo(instance);
+    }
+  }
+
+  tracking::Frame& finish() {
+    const size_t n = frame.keypoints.size();
+    frame.point_ids.assign(n, -1);
+    frame.outlier.assign(n, 0);
+    frame.grid.build(frame.keypoints.uv, kCamera.width, kCamera.height);
+    return frame;
+  }
+};
+
+tracking::ObjectTracker make_tracker(const tracking::ObjectTrackingOptions& options = {}) {
+  return tracking::ObjectTracker(kCamera, options, {1.0f, 1.2f, 1.44f, 1.728f},
+                                 tracking::LevelWeights({1.0f, 1.44f, 2.07f, 2.99f}));
+}
+
+// Per-frame instance ids that change every frame (never the previous frame's id).
+int instance_id(int i, int offset = 0) {
+  static const int ids[] = {3, 7, 2, 9, 4, 11, 5, 8, 6, 12, 13, 10, 14, 15, 16, 17, 18, 19};
+  return ids[(i + offset) % 18];
+}
+
+double rotation_angle_deg(const Mat3& R) {
+  const double c = std::clamp((R.trace() - 1.0) / 2.0, -1.0, 1.0);
+  return std::acos(c) * 180.0 / M_PI;
+}
+
+// Each consecutive pair of track frames moves like the car (T_{i+1} T_i^-1 vs P_{i+1} P_i^-1).
+void expect_motion(const objects::ObjectTrack& track, const Car& car, int first_frame) {
+  for (size_t r = 0; r + 1 < track.frames.size(); ++r) {
+    const int i = track.frames[r].frame;
+    ASSERT_EQ(track.frames[r + 1].frame, i + 1);
+    const Mat4 est = track.frames[r + 1].T_w_o * geometry::se3_inverse(track.frames[r].T_w_o);
+    const Mat4 truth = car.motion(i - first_frame);
+    const Mat4 err = geometry::se3_inverse(truth) * est;
+    EXPECT_LT((est.topRightCorner<3, 1>() - truth.topRightCorner<3, 1>()).norm(), 0.02)
+        << "frame " << i << " -> " << i + 1;
+    EXPECT_LT(rotation_angle_deg(err.topLeftCorner<3, 3>()), 0.1) << "frame " << i << " -> " << i + 1;
+  }
+}
+
+struct TrackerScene : ::testing::Test {
+  std::mt19937 rng{1234};
+  Background background = make_background(rng);
+};
+
+void run_car(tracking::ObjectTracker& tracker, const Car& car, const Background& background,
+             int frames, bool use_flow, std::vector<tracking::ObjectTrackingReport>* reports) {
+  for (int i = 0; i < frames; ++i) {
+    SceneFrame f(i);
+    f.add_car(car, i, instance_id(i));
+    f.add_background(background);
+    reports->push_back(tracker.track(f.finish(), f.instances, use_flow && i > 0 ? f.flow : cv::Mat(), kUp));
+  }
+}
+
+TEST_F(TrackerScene, CarWithChangingInstanceIdsIsOneTrackFollowingTheTrueMotionWithFlow) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0), 0.02);
+  auto tracker = make_tracker();
+  std::vector<tracking::ObjectTrackingReport> reports;
+  run_car(tracker, car, background, 10, /*use_flow=*/true, &reports);
+
+  EXPECT_EQ(reports[0].num_new, 1);
+  for (int i = 1; i < 10; ++i) {
+    EXPECT_EQ(reports[i].num_new, 0) << "frame " << i;
+    EXPECT_EQ(reports[i].num_tracked, 1) << "frame " << i;
+    EXPECT_EQ(reports[i].num_missed, 0) << "frame " << i;
+    EXPECT_GE(reports[i].num_points, 60) << "frame " << i;
+  }
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  ASSERT_EQ(tracker.clusters().size(), 1u);
+  const objects::ObjectTrack& track = tracker.tracks()[0];
+  EXPECT_EQ(track.class_id, kCar);
+  EXPECT_EQ(track.link, geometry::LinkType::kPlanar);
+  EXPECT_EQ(geometry::projector_dof(track.Pi), 3);
+  EXPECT_EQ(track.state, objects::TrackState::kConfirmed);
+  ASSERT_EQ(track.frames.size(), 10u);
+  for (const auto& row : track.frames) EXPECT_TRUE(row.detected) << "frame " << row.frame;
+  // identity rotation at the centroid of the first frame's points
+  EXPECT_TRUE((track.frames[0].T_w_o.topLeftCorner<3, 3>().isIdentity(1e-12)));
+  EXPECT_LT((track.frames[0].T_w_o.topRightCorner<3, 1>() - car.c0).norm(), 0.5);
+  expect_motion(track, car, 0);
+  // the cluster kept the car's points (no background joined it, no duplicates)
+  EXPECT_GE(tracker.clusters()[0].points.size(), 60u);
+  EXPECT_LE(tracker.clusters()[0].points.size(), car.X_o.size());
+  EXPECT_EQ(tracker.clusters()[0].instance, instance_id(9));
+}
+
+TEST_F(TrackerScene, CarWithoutFlowIsTrackedFromTheMotionModelProjection) {
+  // 0.15 m/frame at 15 m: ~7 px, inside the projection search radius
+  const Car car = make_car(rng, Vec3(-1, 0.5, 15), Vec3(0.15, 0, 0.05), 0.01);
+  auto tracker = make_tracker();
+  std::vector<tracking::ObjectTrackingReport> reports;
+  run_car(tracker, car, background, 10, /*use_flow=*/false, &reports);
+  for (int i = 1; i < 10; ++i) EXPECT_EQ(reports[i].num_tracked, 1) << "frame " << i;
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const objects::ObjectTrack& track = tracker.tracks()[0];
+  EXPECT_EQ(track.class_id, kCar);
+  ASSERT_EQ(track.frames.size(), 10u);
+  expect_motion(track, car, 0);
+}
+
+TEST_F(TrackerScene, FrameWithoutMasksKeepsTheTrack) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0), 0.02);
+  auto tracker = make_tracker();
+  for (int i = 0; i < 10; ++i) {
+    SceneFrame f(i);
+    f.add_car(car, i, instance_id(i));
+    f.add_background(background);
+    const cv::Mat instances = i == 5 ? cv::Mat() : f.instances;  // no panoptic output at 5
+    const auto report = tracker.track(f.finish(), instances, i > 0 ? f.flow : cv::Mat(), kUp);
+    if (i == 5) {
+      EXPECT_EQ(report.num_tracked, 1);
+      EXPECT_EQ(report.num_new, 0);
+    }
+  }
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const objects::ObjectTrack& track = tracker.tracks()[0];
+  EXPECT_TRUE(track.alive());
+  ASSERT_EQ(track.frames.size(), 10u);
+  EXPECT_TRUE(track.frames[5].detected);
+  EXPECT_TRUE(track.frames[6].detected);
+  EXPECT_TRUE(track.last().detected);
+  EXPECT_EQ(track.class_id, kCar);
+  expect_motion(track, car, 0);
+}
+
+TEST_F(TrackerScene, CarLeavingTheKeypointsDiesAfterMaxMisses) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0), 0.0);
+  tracking::ObjectTrackingOptions options;
+  auto tracker = make_tracker(options);
+  const int last_seen = 3;
+  int frame = 0;
+  for (; frame <= last_seen; ++frame) {
+    SceneFrame f(frame);
+    f.add_car(car, frame, instance_id(frame));
+    f.add_background(background);
+    tracker.track(f.finish(), f.instances, frame > 0 ? f.flow : cv::Mat(), kUp);
+  }
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  ASSERT_EQ(tracker.tracks()[0].state, objects::TrackState::kConfirmed);
+  // the car is gone: background keypoints only, no instance
+  for (int miss = 1; miss <= options.max_misses + 1; ++miss, ++frame) {
+    SceneFrame f(frame);
+    f.add_background(background);
+    const auto report = tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    EXPECT_EQ(report.num_tracked, 0);
+    EXPECT_EQ(report.num_missed, 1);
+    EXPECT_FALSE(track.last().detected);
+    EXPECT_EQ(track.misses, miss);
+    if (miss <= options.max_misses)
+      EXPECT_EQ(track.state, objects::TrackState::kLost) << "miss " << miss;
+    else
+      EXPECT_EQ(track.state, objects::TrackState::kDead) << "miss " << miss;
+  }
+  // a dead track is not searched any more: the next frame reports no cluster at all
+  SceneFrame f(frame);
+  f.add_background(background);
+  const auto report = tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+  EXPECT_EQ(report.num_missed, 0);
+  EXPECT_EQ(report.num_tracked, 0);
+  EXPECT_EQ(tracker.tracks()[0].frames.size(), static_cast<size_t>(last_seen + 1 + options.max_misses + 1));
+}
+
+TEST_F(TrackerScene, TwoCarsWithDifferentInstancesAreTwoTracks) {
+  const Car a = make_car(rng, Vec3(-4, 0.5, 15), Vec3(0.3, 0, 0), 0.01);
+  const Car b = make_car(rng, Vec3(6, 0.3, 20), Vec3(0.2, 0, 0.1), -0.015);
+  auto tracker = make_tracker();
+  for (int i = 0; i < 10; ++i) {
+    SceneFrame f(i);
+    f.add_car(a, i, instance_id(i));
+    f.add_car(b, i, 100 + instance_id(i, 5));
+    f.add_background(background);
+    const auto report = tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp);
+    EXPECT_EQ(report.num_new, i == 0 ? 2 : 0) << "frame " << i;
+    if (i > 0) EXPECT_EQ(report.num_tracked, 2) << "frame " << i;
+  }
+  ASSERT_EQ(tracker.tracks().size(), 2u);
+  // which track is which: the birth centroid
+  const auto& t0 = tracker.tracks()[0];
+  const auto& t1 = tracker.tracks()[1];
+  const bool first_is_a = (t0.frames[0].T_w_o.topRightCorner<3, 1>() - a.c0).norm() <
+                          (t1.frames[0].T_w_o.topRightCorner<3, 1>() - a.c0).norm();
+  const auto& ta = first_is_a ? t0 : t1;
+  const auto& tb = first_is_a ? t1 : t0;
+  EXPECT_NE(ta.id, tb.id);
+  EXPECT_LT((ta.frames[0].T_w_o.topRightCorner<3, 1>() - a.c0).norm(), 0.5);
+  EXPECT_LT((tb.frames[0].T_w_o.topRightCorner<3, 1>() - b.c0).norm(), 0.5);
+  for (const auto* t : {&ta, &tb}) {
+    EXPECT_EQ(t->class_id, kCar);
+    EXPECT_EQ(t->frames.size(), 10u);
+  }
+  expect_motion(ta, a, 0);
+  expect_motion(tb, b, 0);
+}
+
+TEST_F(TrackerScene, RoadInstanceNeverStartsACluster) {
+  // a compact group of stereo points under one instance: labelled road it stays background,
+  // labelled car (the control) it starts a cluster
+  for (int label : {kRoad, kCar}) {
+    Car patch = make_car(rng, Vec3(0, 1.2, 14), Vec3::Zero(), 0.0, 40);
+    patch.label = label;
+    auto tracker = make_tracker();
+    for (int i = 0; i < 3; ++i) {
+      SceneFrame f(i);
+      f.add_car(patch, i, instance_id(i));
+      f.add_background(background);
+      tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+    }
+    if (label == kRoad)
+      EXPECT_TRUE(tracker.tracks().empty());
+    else
+      EXPECT_EQ(tracker.tracks().size(), 1u);
+  }
+}
+
+TEST_F(TrackerScene, BadInstanceOrFlowImagesThrow) {
+  auto tracker = make_tracker();
+  SceneFrame f(0);
+  f.add_background(background);
+  const tracking::Frame& frame = f.finish();
+  const cv::Mat small = cv::Mat::zeros(kCamera.height / 2, kCamera.width / 2, CV_32SC1);
+  const cv::Mat wrong_type = cv::Mat::zeros(kCamera.height, kCamera.width, CV_8UC1);
+  const cv::Mat transposed = cv::Mat::zeros(kCamera.width, kCamera.height, CV_32SC1);
+  EXPECT_THROW(tracker.track(frame, small, cv::Mat(), kUp), std::invalid_argument);
+  EXPECT_THROW(tracker.track(frame, wrong_type, cv::Mat(), kUp), std::invalid_argument);
+  EXPECT_THROW(tracker.track(frame, transposed, cv::Mat(), kUp), std::invalid_argument);
+  const cv::Mat flow_wrong_type = cv::Mat::zeros(kCamera.height, kCamera.width, CV_32FC1);
+  const cv::Mat flow_small = cv::Mat::zeros(10, 10, CV_32FC2);
+  EXPECT_THROW(tracker.track(frame, f.instances, flow_wrong_type, kUp), std::invalid_argument);
+  EXPECT_THROW(tracker.track(frame, f.instances, flow_small, kUp), std::invalid_argument);
+  // the correct types and sizes are accepted
+  EXPECT_NO_THROW(tracker.track(frame, f.instances, f.flow, kUp));
+  EXPECT_TRUE(tracker.tracks().empty());
+}
+
+}  // namespace
