@@ -380,3 +380,37 @@ TEST_F(TrackerScene, BadInstanceOrFlowImagesThrow) {
 }
 
 }  // namespace
+namespace {
+
+// Known limitations (see the helper report), disabled so the suite stays green; run with
+// --gtest_also_run_disabled_tests. Without flow, a car moving 0.5 m/frame at 15 m (~24 px)
+// is outside the 12 px projection window in the frame after its birth (zero velocity yet):
+// no match, the twist is invalid, and the mask-overlap association then adds the instance's
+// keypoints to the cluster at the stale predicted pose, duplicating every point 0.5 m off.
+TEST_F(TrackerScene, DISABLED_FastCarWithoutFlowIsTrackedAfterBirth) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0), 0.02);
+  auto tracker = make_tracker();
+  std::vector<tracking::ObjectTrackingReport> reports;
+  run_car(tracker, car, background, 10, /*use_flow=*/false, &reports);
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const objects::ObjectTrack& track = tracker.tracks()[0];
+  ASSERT_EQ(track.frames.size(), 10u);
+  for (const auto& row : track.frames) EXPECT_TRUE(row.detected) << "frame " << row.frame;
+  expect_motion(track, car, 0);
+}
+
+TEST_F(TrackerScene, DISABLED_MissedFrameDoesNotAddPointsAtThePredictedPose) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0), 0.02);
+  auto tracker = make_tracker();
+  for (int i = 0; i < 4; ++i) {
+    SceneFrame f(i);
+    f.add_car(car, i, instance_id(i));
+    f.add_background(background);
+    tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+    ASSERT_EQ(tracker.clusters().size(), 1u);
+    // never more points than the car has distinct textured points
+    EXPECT_LE(tracker.clusters()[0].points.size(), car.X_o.size()) << "frame " << i;
+  }
+}
+
+}  // namespace
