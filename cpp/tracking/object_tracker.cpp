@@ -51,6 +51,10 @@ Vec3 transform(const Mat4& T, const Vec3& X) {
   return T.topLeftCorner<3, 3>() * X + T.topRightCorner<3, 1>();
 }
 
+// Search window scale for a cluster without a velocity (its first frames): 3 x 12 px covers a
+// car crossing the image at 15 m and 18 km/h relative speed between two frames.
+constexpr double kNewbornSearchScale = 3.0;
+
 bool contains(const std::vector<int>& ids, int id) {
   return std::find(ids.begin(), ids.end(), id) != ids.end();
 }
@@ -89,6 +93,7 @@ std::vector<ObjectTracker::Match> ObjectTracker::search_cluster(
     objects::ClusterInstanceEvidence* evidence) const {
   std::vector<Match> matches;
   std::vector<int> candidates;
+  const bool newborn = cluster.velocity.isZero();
   for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) {
     const objects::ObjectPoint& p = cluster.points[i];
     const Vec3 X_c = transform(T_c_o, p.X_o);
@@ -104,7 +109,9 @@ std::vector<ObjectTracker::Match> ObjectTracker::search_cluster(
       radius = options_.flow_radius_px;  // eq. 4's search around the flow prediction
     } else if (in_front) {
       predicted = projected;
-      radius = options_.projection_radius_px;
+      // a newborn cluster has no velocity yet: its prediction is where it was, so without
+      // flow a fast car lies farther away than the motion model's window
+      radius = options_.projection_radius_px * (newborn ? kNewbornSearchScale : 1.0);
     } else {
       continue;
     }
@@ -237,7 +244,9 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     cluster.instance = instance;
     const auto cls = instance_class_.find(instance);
     if (cls != instance_class_.end()) cluster.class_votes.add(cls->second);
-    add_points(c, frame, instance);
+    // only with a valid pose: points placed with a stale prediction would duplicate the
+    // cluster's own points a motion step away
+    if (valid) add_points(c, frame, instance);
   }
   cull(cluster);
   return valid;

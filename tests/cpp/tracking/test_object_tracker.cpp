@@ -387,7 +387,7 @@ namespace {
 // is outside the 12 px projection window in the frame after its birth (zero velocity yet):
 // no match, the twist is invalid, and the mask-overlap association then adds the instance's
 // keypoints to the cluster at the stale predicted pose, duplicating every point 0.5 m off.
-TEST_F(TrackerScene, DISABLED_FastCarWithoutFlowIsTrackedAfterBirth) {
+TEST_F(TrackerScene, FastCarWithoutFlowIsTrackedAfterBirth) {
   const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0), 0.02);
   auto tracker = make_tracker();
   std::vector<tracking::ObjectTrackingReport> reports;
@@ -399,7 +399,7 @@ TEST_F(TrackerScene, DISABLED_FastCarWithoutFlowIsTrackedAfterBirth) {
   expect_motion(track, car, 0);
 }
 
-TEST_F(TrackerScene, DISABLED_MissedFrameDoesNotAddPointsAtThePredictedPose) {
+TEST_F(TrackerScene, MissedFrameDoesNotAddPointsAtThePredictedPose) {
   const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0), 0.02);
   auto tracker = make_tracker();
   for (int i = 0; i < 4; ++i) {
