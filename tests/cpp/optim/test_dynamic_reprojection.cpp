@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <chrono>
 #include <cstdio>
 #include <random>
 #include <vector>
@@ -296,27 +295,3 @@ TEST(DynamicReprojection, DisparityOffsetHonoured) {
   EXPECT_LT(r1.norm(), 1e-9);
 }
 
-// Not a pass/fail test: time per evaluation with all Jacobians (printed).
-TEST(DynamicReprojection, EvaluationTime) {
-  const auto cam = test_scenes::kitti_camera();
-  std::mt19937 rng(3);
-  const Scene s = random_scene(rng);
-  StereoDynamicReprojectionCost cost(&cam, observe<3>(cam, s.X_c, 0.5), 1.0, 0.1);
-  const double* x[3] = {s.camera.data(), s.object.data(), s.X_o.data()};
-  Eigen::Matrix<double, 3, 7, Eigen::RowMajor> Jc, Jo;
-  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> Jp;
-  double* jac[3] = {Jc.data(), Jo.data(), Jp.data()};
-  Vec3 r;
-  const int n = 200000;
-  double sink = 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < n; ++i) {
-    cost.Evaluate(x, r.data(), jac);
-    sink += r(0) + Jc(0, 0);
-  }
-  const double ns =
-      std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() / n;
-  std::printf("e_dyna stereo, residual + 3 Jacobians: %.0f ns per evaluation (%g)\n", ns,
-              sink > 0 ? 1.0 : 0.0);
-  SUCCEED();
-}
