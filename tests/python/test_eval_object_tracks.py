@@ -1,6 +1,5 @@
 """Visual object tracks against ground truth: offset / alignment gauge, coverage, ghosts."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,7 +13,6 @@ from twistslam.objects.result import TrackedObject
 
 FRAMES = 40
 NOISE_M, NOISE_DEG = 0.01, 0.1
-SIM = Path(__file__).resolve().parents[2] / ".cache" / "sim" / "urban-seed0-n100"
 
 
 def pose(yaw_deg=0.0, t=(0, 0, 0), rotvec_deg=None):
@@ -162,15 +160,24 @@ def test_offset_mean_ignores_an_outlier():
     np.testing.assert_allclose(estimate_offset(T_gt, T_est), OFFSET, atol=1e-9)
 
 
-@pytest.mark.skipif(not (SIM / "training").is_dir(), reason="no cached simulation (make demo)")
-def test_noisy_ground_truth_of_a_simulated_sequence():
-    gt = load_ground_truth(SIM, "0000")
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory):
+    from twistslam.sim import generate
+
+    root = tmp_path_factory.mktemp("object_tracks_sim")
+    generate(root, "urban", frames=12, seed=0, width=414, height=125, progress=False,
+             lidar__enabled=False, overwrite=True)
+    return root
+
+
+def test_noisy_ground_truth_of_a_simulated_sequence(sim):
+    gt = load_ground_truth(sim, "0000")
     rng = np.random.default_rng(5)
     est = []
     for tid, track in gt.tracks.items():
         seen = track.labelled
         est.append(tracked(tid, track.frames[seen], noisy(track.T_w_o[seen] @ OFFSET, rng)))
-    ev = evaluate_object_tracks(est, gt.T_w_c, gt)
+    ev = evaluate_object_tracks(est, gt.T_w_c, gt, min_frames=10)
     assert len(ev.cars) >= 1 and ev.n_ghosts == 0
     assert ev.n_tracked == len(ev.cars) and ev.ate_aligned < 0.03
 
