@@ -117,7 +117,8 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
             score=np.zeros(len(frames)), mean_score=0.0, confidence=float(c["hits"]),
             range=np.linalg.norm(T_w_box[:, :3, 3], axis=1)))
         rows = np.flatnonzero(reported)
-        if not len(rows) or calib is None:
+        # a cluster whose points were all culled (or a flat one) has no box to write
+        if not len(rows) or calib is None or not (size > 0).all():
             continue
         T_c_box = np.stack([np.linalg.inv(camera_poses[int(f)]) for f in frames[rows]]) @ T_w_box[rows]
         R = T_c_box[:, :3, :3]
