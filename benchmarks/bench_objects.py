@@ -45,6 +45,7 @@ from twistslam.demo import MOVABLE_CLASSES, cached_sequence
 from twistslam.eval import evaluate_camera
 from twistslam.eval.object_tracks import evaluate_object_tracks, load_ground_truth
 from twistslam.objects.result import TrackedObject
+from twistslam.objects.visual import VisualObjects
 from twistslam.timings import Timings
 
 SEQ = "0000"
@@ -135,7 +136,7 @@ def gt_as_estimate(gt, rng: np.random.Generator) -> FakeResult:
             frames=track.frames[seen], T_w_o=poses, size=track.size.copy(),
             velocity_kmh=np.zeros(n), detected=np.ones(n, bool), reported=np.ones(n, bool),
             score=np.ones(n), mean_score=1.0))
-    return FakeResult(camera_poses=gt.T_w_c.copy(), objects=objects)
+    return FakeResult(camera_poses=gt.T_w_c.copy(), objects=VisualObjects(objects=objects))
 
 
 def per_object_ms(result) -> dict[str, float]:
@@ -207,7 +208,7 @@ def main(argv: list[str] | None = None) -> int:
                         continue
                 if args.gt_as_estimate:  # the config does not matter here
                     result = gt_as_estimate(gt, np.random.default_rng(seed))
-                ev = evaluate_object_tracks(result.objects, result.camera_poses, gt)
+                ev = evaluate_object_tracks(result.objects.reported(), result.camera_poses, gt)
                 cam = evaluate_camera(gt_cam, result.camera_poses)
                 print(format_row(label, name, ev, cam, result), flush=True)
                 if args.per_car:

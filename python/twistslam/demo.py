@@ -142,13 +142,9 @@ def _run_markdown(result: Result) -> str:
 def _object_summary(root: Path, result) -> dict:
     """The object clusters the run tracked, against the simulator's object poses (issue 10's
     metrics: moving cars seen 20+ frames within 50 m, object frame offset aligned)."""
-    import dataclasses
-
     from .eval.object_tracks import evaluate_object_tracks, load_ground_truth
 
-    shown = [dataclasses.replace(o, frames=o.frames[o.reported], T_w_o=o.T_w_o[o.reported])
-             for o in result.objects if o.reported.any()]
-    evaluation = evaluate_object_tracks(shown, result.camera_poses, load_ground_truth(root, SEQ))
+    evaluation = evaluate_object_tracks(result.objects.reported(), result.camera_poses, load_ground_truth(root, SEQ))
     print(f"\nObject clusters ({len(result.objects)} tracked; segmentation {result.segmentation}, "
           f"flow {result.flow}):")
     print(evaluation.format_table())

@@ -11,6 +11,7 @@ few background points a mask lets in). Reported frames are those with a valid tw
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -69,6 +70,12 @@ class VisualObjects:
 
     def __getitem__(self, k: int) -> TrackedObject:
         return self.objects[k]
+
+    def reported(self) -> list[TrackedObject]:
+        """Each cluster restricted to its reported rows (frames with a valid twist): what the
+        evaluator compares; rows predicted through misses are left out."""
+        return [dataclasses.replace(o, frames=o.frames[o.reported], T_w_o=o.T_w_o[o.reported])
+                for o in self.objects if o.reported.any()]
 
     def __repr__(self) -> str:
         return f"VisualObjects({len(self)} clusters, {len(self.tracking)} boxes)"
