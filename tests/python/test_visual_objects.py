@@ -86,3 +86,18 @@ def test_box_from_points_recovers_a_turned_box():
     angle = np.arctan2(T[0, 2], T[0, 0])
     assert abs(np.sin(angle - yaw)) < np.sin(np.radians(3))  # yaw modulo pi
     assert np.allclose(T[:3, 3], [1.0, 0.2, -0.5], atol=0.1)
+
+
+def test_run_writes_a_rerun_recording_with_the_objects(sim, tmp_path):
+    from rerun.chunk import RrdReader
+
+    path = tmp_path / "run.rrd"
+    twistslam.run(KittiTracking(sim, "0000"), {"run": {"max_frames": 4}}, progress=False,
+                  segmentation="files", flow="files", viz_save=path)
+    entities = {}
+    for chunk in RrdReader(path).stream():
+        entities.setdefault(chunk.entity_path, 0)
+        entities[chunk.entity_path] += len(chunk.to_record_batch())
+    for entity in ("/world/camera", "/world/camera/image", "/world/camera/image/segmentation",
+                   "/world/objects/boxes", "/world/objects/points", "/world/camera_trajectory"):
+        assert entities.get(entity, 0) > 0, f"{entity} missing from {sorted(entities)}"

@@ -31,7 +31,7 @@ class RunViewer:
             image = np.repeat(image[:, :, None], 3, axis=2)
         if not self._camera_logged and slam.camera is not None:
             cam = slam.camera
-            self.logger.log_camera(np.asarray(cam.K()), image.shape[1], image.shape[0])
+            self.logger.log_camera(np.asarray(cam.K), image.shape[1], image.shape[0])
             self._camera_logged = True
         views = []
         T_c_w = np.linalg.inv(tracked.T_w_c)
@@ -70,6 +70,6 @@ def _box2d(points_o: np.ndarray, T_c_o: np.ndarray, camera) -> np.ndarray | None
     X = X[X[:, 2] > 0.1]
     if len(X) < 3 or camera is None:
         return None
-    K = np.asarray(camera.K())
+    K = np.asarray(camera.K)
     uv = (X @ K.T)[:, :2] / X[:, 2:3]
     return np.array([*uv.min(axis=0), *uv.max(axis=0)])
