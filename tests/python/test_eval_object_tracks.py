@@ -6,13 +6,14 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from twistslam.eval.object_tracks import (
-    GtTrack, SequenceGroundTruth, estimate_offset, evaluate_object_tracks, evaluated_cars,
-    load_ground_truth,
+    MAX_RANGE_M, MIN_BOX_HEIGHT_PX, MIN_VISIBLE_FRAMES, GtTrack, SequenceGroundTruth,
+    estimate_offset, evaluate_object_tracks, evaluated_cars, load_ground_truth, selected_frames,
 )
 from twistslam.objects.result import TrackedObject
 
 FRAMES = 40
 NOISE_M, NOISE_DEG = 0.01, 0.1
+TALL_PX = 80.0  # labelled box height of the synthetic cars: well above the minimum
 
 
 def pose(yaw_deg=0.0, t=(0, 0, 0), rotvec_deg=None):
@@ -32,18 +33,24 @@ def turning_track(x0, z0, speed, yaw_rate_deg, n=FRAMES):
     return np.stack(poses)
 
 
+def gt_track(tid, moving, T_w_o, labelled):
+    """A car of fixed size whose labelled boxes are ``TALL_PX`` high (NaN where unlabelled)."""
+    heights = np.where(labelled, TALL_PX, np.nan)
+    return GtTrack(tid, "Car", moving, np.arange(FRAMES), T_w_o, np.array([4.0, 1.7, 1.5]),
+                   labelled, heights)
+
+
 def synthetic_gt():
     T_w_c = np.stack([pose(0.3 * f, (0, 0, 1.0 * f)) for f in range(FRAMES)])
     frames = np.arange(FRAMES)
-    size = np.array([4.0, 1.7, 1.5])
+    everywhere = np.ones(FRAMES, bool)
     tracks = {
-        1: GtTrack(1, "Car", True, frames, turning_track(2.0, 10.0, 1.3, 1.5), size, np.ones(FRAMES, bool)),
-        2: GtTrack(2, "Car", True, frames, turning_track(-3.0, 20.0, 1.1, -1.0), size, np.ones(FRAMES, bool)),
+        1: gt_track(1, True, turning_track(2.0, 10.0, 1.3, 1.5), everywhere),
+        2: gt_track(2, True, turning_track(-3.0, 20.0, 1.1, -1.0), everywhere),
         # parked: not evaluated, but an estimate on it is no ghost
-        3: GtTrack(3, "Car", False, frames, np.repeat(pose(-90.0, (-6, 0.8, 15))[None], FRAMES, 0),
-                   size, np.ones(FRAMES, bool)),
+        3: gt_track(3, False, np.repeat(pose(-90.0, (-6, 0.8, 15))[None], FRAMES, 0), everywhere),
         # seen in too few frames to be evaluated
-        4: GtTrack(4, "Car", True, frames, turning_track(6.0, 12.0, 1.0, 0.0), size, frames < 10),
+        4: gt_track(4, True, turning_track(6.0, 12.0, 1.0, 0.0), frames < 10),
     }
     return SequenceGroundTruth(T_w_c=T_w_c, tracks=tracks)
 
@@ -190,3 +197,69 @@ def test_a_waiting_moving_car_has_ate_but_no_rpe_per_metre(world):
     row = ev.cars[0]
     assert row.path_m < 1e-9 and np.isnan(row.rpe_t) and np.isnan(row.rpe_r)
     assert row.coverage == 1.0 and row.ate_aligned < 0.03
+
+
+def test_frames_with_boxes_under_the_minimum_height_are_not_evaluated(world):
+    gt, A, cams = world
+    car = gt.tracks[1]
+    car.labelled[[3, 17]] = False  # two frames out of the image as well
+    rng = np.random.default_rng(7)
+    car.box_height_px = np.where(car.labelled, rng.uniform(5.0, 60.0, FRAMES), np.nan)
+    # the old rule, computed from the labels and the box centre's distance to the camera
+    near = np.linalg.norm(car.T_w_o[:, :3, 3] - gt.T_w_c[car.frames, :3, 3], axis=1) <= MAX_RANGE_M
+    old = car.frames[car.labelled & near]
+    small = car.frames[car.labelled & (car.box_height_px < MIN_BOX_HEIGHT_PX)]
+    assert len(small) and len(old) - len(np.intersect1d(old, small)) >= MIN_VISIBLE_FRAMES
+
+    np.testing.assert_array_equal(selected_frames(car, gt.T_w_c, min_box_height_px=0), old)
+    np.testing.assert_array_equal(selected_frames(car, gt.T_w_c), np.setdiff1d(old, small))
+    np.testing.assert_array_equal(evaluated_cars(gt)[1], np.setdiff1d(old, small))
+    np.testing.assert_array_equal(evaluated_cars(gt, min_box_height_px=0)[1], old)
+
+    # an estimate only where the box is tall enough: fully covered under the rule, not without
+    tall = np.setdiff1d(old, small)
+    est = [estimate_of(gt, A, 1, OFFSET, rng, frames=tall)]
+    row = evaluate_object_tracks(est, cams, gt).cars[0]
+    assert row.frames == len(tall) and row.coverage == 1.0
+    row_old = evaluate_object_tracks(est, cams, gt, min_box_height_px=0).cars[0]
+    assert row_old.frames == len(old) and row_old.coverage == pytest.approx(len(tall) / len(old))
+
+
+def test_a_car_hidden_all_along_is_not_evaluated_and_a_track_on_it_is_no_ghost(world):
+    gt, A, cams = world
+    hidden = gt.tracks[2]
+    hidden.box_height_px = np.full(FRAMES, 0.5 * MIN_BOX_HEIGHT_PX)
+    assert sorted(evaluated_cars(gt)) == [1]
+    assert sorted(evaluated_cars(gt, min_box_height_px=0)) == [1, 2]
+    ev = evaluate_object_tracks([estimate_of(gt, A, 2, OFFSET, np.random.default_rng(8))], cams, gt)
+    assert [c.gt_id for c in ev.cars] == [1] and ev.ghost_ids == []
+
+
+def parse_label_heights(path):
+    """``{(track id, frame): bottom - top}`` of a KITTI tracking label file, read directly."""
+    heights = {}
+    for line in path.read_text(encoding="utf-8").splitlines():
+        tok = line.split()
+        if tok:  # frame track_id type truncated occluded alpha left top right bottom ...
+            heights[(int(tok[1]), int(tok[0]))] = float(tok[9]) - float(tok[7])
+    return heights
+
+
+def test_ground_truth_reads_the_box_heights_of_label_02(sim):
+    gt = load_ground_truth(sim, "0000")
+    heights = parse_label_heights(sim / "training" / "label_02" / "0000.txt")
+    n_labelled = 0
+    for tid, track in gt.tracks.items():
+        expected = np.array([heights.get((tid, int(f)), np.nan) for f in track.frames])
+        np.testing.assert_array_equal(track.box_height_px, expected)
+        np.testing.assert_array_equal(track.labelled, np.isfinite(expected))
+        n_labelled += track.labelled.sum()
+    assert n_labelled > 0
+    # the simulator labels cars seen through a gap: the rule must drop some labelled frames
+    small = [(tid, f) for (tid, f), h in heights.items()
+             if tid in gt.tracks and gt.tracks[tid].cls == "Car" and h < MIN_BOX_HEIGHT_PX]
+    assert small
+    for tid, track in gt.tracks.items():
+        kept = set(selected_frames(track, gt.T_w_c).tolist())
+        assert not kept & {f for t, f in small if t == tid}
+        assert kept <= set(selected_frames(track, gt.T_w_c, min_box_height_px=0).tolist())

@@ -1,10 +1,7 @@
 """Visual object tracks against the simulator's ground truth (issue 10's targets).
 
-Ground truth (written by :mod:`twistslam.sim`, world = camera of frame 0):
-``training/object_poses/SEQ.txt`` (every object in every frame: ``frame track_id class l w h``
-and a row-major 3x4 ``T_w_o``, origin at the box centre, x along the length, y down, z across),
-``poses/SEQ.txt`` (``T_w_c``), ``label_02/SEQ.txt`` (the objects seen in the image) and
-``meshes/SEQ/shapes.json`` (per track ``moving``).
+The ground truth, and which cars and frames are evaluated, is :mod:`.object_ground_truth`
+(re-exported here). Per car: coverage of its evaluated frames, and its pose errors.
 
 Two variants of the pose errors of a car:
 
@@ -22,22 +19,17 @@ Two variants of the pose errors of a car:
 
 from __future__ import annotations
 
-import json
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..datasets import read_labels, read_poses
+from .object_ground_truth import (  # noqa: F401  (re-exported: callers import them from here)
+    CAR_CLASS, MAX_RANGE_M, MIN_BOX_HEIGHT_PX, MIN_VISIBLE_FRAMES, GtTrack, SequenceGroundTruth,
+    evaluated_cars, load_ground_truth, selected_frames,
+)
 from .object_poses import track_pose_errors
 from .trajectory import invert, rotation_angle
 
-#: class of the evaluated ground-truth objects (KITTI type)
-CAR_CLASS = "Car"
-#: a car is evaluated when seen this often (frames labelled in the image and in range)
-MIN_VISIBLE_FRAMES = 20
-#: range (m, box centre from the camera) of the evaluated frames: the issue's "within 50 m"
-MAX_RANGE_M = 50.0
 #: an estimated position within the box grown by this much (m, every side) hits the object:
 #: a cluster centroid lies inside the visible part of the car, 1 m covers a biased centroid
 HIT_MARGIN_M = 1.0
@@ -53,82 +45,6 @@ MIN_RPE_PATH_M = 5.0
 #: offset samples farther than this from the first mean (m, deg) are left out of the second
 OFFSET_INLIER_M = 0.5
 OFFSET_INLIER_DEG = 10.0
-
-
-@dataclass
-class GtTrack:
-    """One ground-truth object; row ``k`` of the arrays is frame ``frames[k]``.
-
-    ``size`` is (3,) length, width, height (m); ``labelled`` (K,) the object is in the image.
-    """
-
-    track_id: int
-    cls: str
-    moving: bool
-    frames: np.ndarray
-    T_w_o: np.ndarray
-    size: np.ndarray
-    labelled: np.ndarray
-
-    def half_extents(self) -> np.ndarray:
-        """(3,) half sizes along the object axes x (length), y (height), z (width)."""
-        length, width, height = self.size
-        return 0.5 * np.array([length, height, width])
-
-
-@dataclass
-class SequenceGroundTruth:
-    """Camera poses ``T_w_c`` (F, 4, 4) and every object's track, keyed by track id."""
-
-    T_w_c: np.ndarray
-    tracks: dict[int, GtTrack] = field(default_factory=dict)
-
-
-def load_ground_truth(root: str | Path, seq: str) -> SequenceGroundTruth:
-    """Read a simulated sequence (``root`` holds ``training/``)."""
-    base = Path(root) / "training"
-    rows: dict[int, list] = {}
-    classes, sizes = {}, {}
-    for line in (base / "object_poses" / f"{seq}.txt").read_text(encoding="utf-8").splitlines():
-        tok = line.split()
-        if not tok:
-            continue
-        frame, tid = int(tok[0]), int(tok[1])
-        classes[tid], sizes[tid] = tok[2], np.array(tok[3:6], dtype=np.float64)
-        T = np.eye(4)
-        T[:3, :] = np.array(tok[6:18], dtype=np.float64).reshape(3, 4)
-        rows.setdefault(tid, []).append((frame, T))
-    labels = read_labels(base / "label_02" / f"{seq}.txt")
-    seen = set(zip(labels.track_id.tolist(), labels.frame.tolist()))
-    shapes = json.loads((base / "meshes" / seq / "shapes.json").read_text(encoding="utf-8"))
-    tracks = {}
-    for tid, items in rows.items():
-        items.sort(key=lambda item: item[0])
-        frames = np.array([f for f, _ in items], dtype=np.int64)
-        tracks[tid] = GtTrack(
-            track_id=tid, cls=classes[tid], moving=bool(shapes.get(f"{tid:06d}", {}).get("moving")),
-            frames=frames, T_w_o=np.stack([T for _, T in items]), size=sizes[tid],
-            labelled=np.array([(tid, int(f)) in seen for f in frames]))
-    return SequenceGroundTruth(T_w_c=read_poses(base / "poses" / f"{seq}.txt"), tracks=tracks)
-
-
-def selected_frames(track: GtTrack, T_w_c: np.ndarray, max_range_m: float = MAX_RANGE_M) -> np.ndarray:
-    """Frames where the object is labelled and its centre within ``max_range_m`` of the camera."""
-    T_c_o = invert(T_w_c[track.frames]) @ track.T_w_o
-    near = np.linalg.norm(T_c_o[:, :3, 3], axis=1) <= max_range_m
-    return track.frames[track.labelled & near]
-
-
-def evaluated_cars(gt: SequenceGroundTruth, min_frames: int = MIN_VISIBLE_FRAMES,
-                   max_range_m: float = MAX_RANGE_M) -> dict[int, np.ndarray]:
-    """``{track id: selected frames}`` of the moving cars seen in ``min_frames`` or more."""
-    cars = {}
-    for tid, track in sorted(gt.tracks.items()):
-        if track.cls == CAR_CLASS and track.moving:
-            frames = selected_frames(track, gt.T_w_c, max_range_m)
-            if len(frames) >= min_frames:
-                cars[tid] = frames
-    return cars
 
 
 def to_gt_world(track, T_w_c_est: np.ndarray,
@@ -185,7 +101,7 @@ class CarTrackRow:
     Attributes
     ----------
     gt_id : ground-truth track id.
-    frames : its evaluated frames (labelled, within range).
+    frames : its evaluated frames (labelled, within range, box tall enough).
     coverage : fraction of them with a hitting estimated track (any).
     n_compared : evaluated frames where the main estimated track has a pose.
     path_m : ground-truth distance travelled over the compared frames (m).
@@ -339,7 +255,8 @@ def ghost_tracks(gt: SequenceGroundTruth, mapped: dict[int, tuple],
 
 def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGroundTruth,
                            margin_m: float = HIT_MARGIN_M, min_frames: int = MIN_VISIBLE_FRAMES,
-                           max_range_m: float = MAX_RANGE_M) -> ObjectTrackEvaluation:
+                           max_range_m: float = MAX_RANGE_M,
+                           min_box_height_px: float = MIN_BOX_HEIGHT_PX) -> ObjectTrackEvaluation:
     """Evaluate estimated object tracks against the simulator's ground truth.
 
     Parameters
@@ -348,8 +265,10 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
         (K,) and ``T_w_o`` (K, 4, 4) in the SLAM world).
     camera_poses : (F, 4, 4) estimated ``T_w_c`` (NaN rows: frames without a pose, skipped).
     gt : :func:`load_ground_truth`'s result.
-    margin_m, min_frames, max_range_m : see ``HIT_MARGIN_M``, ``MIN_VISIBLE_FRAMES``,
-        ``MAX_RANGE_M``.
+    margin_m, min_frames, max_range_m, min_box_height_px : see ``HIT_MARGIN_M``,
+        ``MIN_VISIBLE_FRAMES``, ``MAX_RANGE_M``, ``MIN_BOX_HEIGHT_PX`` (0: every labelled
+        frame in range is evaluated, however small its box). Ghosts are judged against every
+        ground-truth box, small or not: a track on a hidden car is no ghost.
     """
     camera_poses = np.asarray(camera_poses, dtype=np.float64)
     mapped = {}
@@ -357,6 +276,6 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
         frames, poses, raw = to_gt_world(obj, camera_poses, gt.T_w_c)
         if len(frames):
             mapped[int(obj.track_id)] = (frames, poses, raw)
-    cars = evaluated_cars(gt, min_frames, max_range_m)
+    cars = evaluated_cars(gt, min_frames, max_range_m, min_box_height_px)
     rows = [_car_row(gt, gt.tracks[tid], frames, mapped, margin_m) for tid, frames in cars.items()]
     return ObjectTrackEvaluation(cars=rows, ghost_ids=ghost_tracks(gt, mapped, margin_m))
