@@ -1,10 +1,12 @@
-"""RAFT optical flow (torchvision's ``raft_small`` / ``raft_large``) from a weight file the
-user names. Nothing is downloaded: without a weight file there is no RAFT source.
+"""RAFT optical flow (torchvision's ``raft_small`` / ``raft_large`` architectures, implemented
+in plain torch in :mod:`twistslam.perception.raft_model`) from a weight file the user names.
+Nothing is downloaded: without a weight file there is no RAFT source.
 
-torch is an optional extra (``pip install twistslam[models]``) and torchvision is needed for
-the architectures; both are imported only when a RAFT source is built. Any torch module with
-RAFT's interface (``network(image1, image2, num_flow_updates=K)`` -> list of (N, 2, H, W)
-flow predictions, the last the finest) can be passed instead, e.g. a fine-tuned model.
+torch is an optional extra (``pip install twistslam[models]``), imported only when a RAFT source
+is built; torchvision is not needed, and its checkpoints (e.g. ``raft_small_C_T_V2``) load as they
+are. Any torch module with RAFT's interface (``network(image1, image2, num_flow_updates=K)`` ->
+list of (N, 2, H, W) flow predictions, the last the finest) can be passed instead, e.g. a
+fine-tuned model.
 """
 
 from __future__ import annotations
@@ -28,12 +30,12 @@ def _import_torch():
 
 
 def load_raft(weights: str | Path, model: str = "raft_small"):
-    """torchvision's ``model`` with the state dict of the file ``weights``, in eval mode.
+    """The RAFT network ``model`` with the state dict of the file ``weights``, in eval mode.
 
     Raises
     ------
     ValueError for an unknown model or a file that is not that model's state dict;
-    FileNotFoundError for a missing file; ImportError when torchvision is not installed.
+    FileNotFoundError for a missing file; ImportError when torch is not installed.
     """
     if model not in RAFT_MODELS:
         raise ValueError(f"RAFT model '{model}': expected one of {', '.join(RAFT_MODELS)}")
@@ -41,14 +43,14 @@ def load_raft(weights: str | Path, model: str = "raft_small"):
     if not path.is_file():
         raise FileNotFoundError(f"RAFT weights: {path} not found (nothing is downloaded; name a .pth file)")
     torch = _import_torch()
-    try:
-        from torchvision.models import optical_flow
-    except ImportError as e:
-        raise ImportError("RAFT flow needs torchvision (pip install torchvision matching your torch)") from e
-    network = getattr(optical_flow, model)(weights=None)
+    from . import raft_model
+
+    network = getattr(raft_model, model)()
     try:
         state = torch.load(path, map_location="cpu", weights_only=True)
-        network.load_state_dict(state)
+        if not isinstance(state, dict):
+            raise TypeError(f"the file holds a {type(state).__name__}, not a dict of tensors")
+        network.load_state_dict(state, strict=True)
     except Exception as e:  # unpickling errors and key / shape mismatches alike
         raise ValueError(f"{path}: not a {model} state dict ({type(e).__name__}: {str(e)[:200]})") from e
     return network.eval()
