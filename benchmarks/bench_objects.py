@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/bench_objects.py [--scenarios urban crowded] [--seeds 0]
         [--frames 100] [--rows default dis ...] [--set section.key=value ...] [--per-car]
-        [--gt-as-estimate]
+        [--gt-as-estimate] [--raft-weights FILE] [--raft-frames N]
 
 Rows (each a ``twistslam.run(seq, config=cfg, progress=False, segmentation=SEG, flow=FLOW)``
 on the simulator's sequence, ``.cache/sim/SCENARIO-seedS-nF``, generated when missing):
@@ -13,7 +13,11 @@ on the simulator's sequence, ``.cache/sim/SCENARIO-seedS-nF``, generated when mi
 * ``no-const``: ``visual_objects.use_const = False`` (no e_const in the BA);
 * ``dis``: OpenCV DIS flow instead of the flow files;
 * ``boxes-seg``: instance masks from the oracle detections instead of the panoptic files;
-* ``kp-only`` / ``kp-extra``: ``visual_objects.extra_keypoints`` False / True.
+* ``kp-only`` / ``kp-extra``: ``visual_objects.extra_keypoints`` False / True;
+* ``raft``: RAFT flow (``raft_small``) from the state-dict file ``--raft-weights FILE`` (or
+  ``$TWISTSLAM_RAFT_WEIGHTS``) over the first ``--raft-frames`` frames only (default 10: RAFT
+  is slow on a CPU), so its object metrics still count every car of the whole sequence and
+  mainly its flow ms is comparable; without weights it prints "not available".
 
 Per row: mean object RPE_t (m/m), RPE_r (deg/m) and aligned ATE (m) over the moving cars
 seen 20+ frames within 50 m (:mod:`twistslam.eval.object_tracks`), cars tracked in >= 90 %
@@ -32,6 +36,7 @@ is then still evaluated, after a note).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -77,7 +82,12 @@ ROWS = {r.name: r for r in [
     Row("boxes-seg", segmentation="boxes"),
     Row("kp-only", {SECTION: {"extra_keypoints": False}}),
     Row("kp-extra", {SECTION: {"extra_keypoints": True}}),
+    Row("raft", flow="raft"),
 ]}
+#: environment variable naming the RAFT state-dict file when --raft-weights is not given
+RAFT_WEIGHTS_ENV = "TWISTSLAM_RAFT_WEIGHTS"
+#: frames of the raft row: raft_small takes about a second per KITTI-size pair on a CPU
+RAFT_FRAMES = 10
 
 
 class NotAvailable(Exception):
@@ -95,10 +105,21 @@ def build_config(row: Row, extra: list[str]) -> twistslam.Config:
         raise NotAvailable(f"config: {exc}") from None
 
 
-def run_slam(root: Path, row: Row, config) -> object:
+def raft_settings(row: Row, weights: Path | None, frames: int) -> tuple[Path | None, list[str]]:
+    """The weight file and the frame-limit override of a RAFT row (nothing for other rows)."""
+    if row.flow != "raft":
+        return None, []
+    if weights is None:
+        raise NotAvailable("no RAFT weights (--raft-weights)")
+    if not weights.is_file():
+        raise NotAvailable(f"RAFT weights {weights} not found (--raft-weights)")
+    return weights, [f"run.max_frames={frames}"]
+
+
+def run_slam(root: Path, row: Row, config, flow_weights: Path | None = None) -> object:
     try:
         return twistslam.run((root, SEQ), config=config, progress=False,
-                             segmentation=row.segmentation, flow=row.flow)
+                             segmentation=row.segmentation, flow=row.flow, flow_weights=flow_weights)
     except TypeError as exc:  # the perception arguments are being added (issue 10)
         if "segmentation" in str(exc) or "flow" in str(exc):
             raise NotAvailable(f"twistslam.run: {exc}") from None
@@ -185,6 +206,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--per-car", action="store_true", help="print each row's per-car table")
     parser.add_argument("--gt-as-estimate", action="store_true",
                         help="debug: noisy ground truth instead of a SLAM run")
+    parser.add_argument("--raft-weights", type=Path, metavar="FILE",
+                        default=os.environ.get(RAFT_WEIGHTS_ENV) or None,
+                        help=f"raft_small state dict for the raft row (default: ${RAFT_WEIGHTS_ENV})")
+    parser.add_argument("--raft-frames", type=int, default=RAFT_FRAMES, metavar="N",
+                        help="frames of the raft row")
     args = parser.parse_args(argv)
 
     print(f"RPE_t m/m, RPE_r deg/m, ATE_al m (means over moving cars); camera ATE m, RPE m and "
@@ -200,8 +226,9 @@ def main(argv: list[str] | None = None) -> int:
             for name in args.rows:
                 row = ROWS[name]
                 try:
-                    config = build_config(row, args.set)
-                    result = None if args.gt_as_estimate else run_slam(root, row, config)
+                    weights, limit = raft_settings(row, args.raft_weights, args.raft_frames)
+                    config = build_config(row, args.set + limit)
+                    result = None if args.gt_as_estimate else run_slam(root, row, config, weights)
                 except NotAvailable as exc:
                     print(f"{label:<14} {name:<10} not available: {str(exc).split(';')[0]}")
                     if not args.gt_as_estimate:
