@@ -1,5 +1,7 @@
 #include "features/stereo.hpp"
 
+#include "features/sad.hpp"
+
 #include <opencv2/core/utility.hpp>
 
 #include <algorithm>
@@ -49,90 +51,6 @@ std::vector<cv::Mat> pyramid_for(const Keypoints& k, const cv::Mat& gray, int le
       k.pyramid[0].size() == gray.size())
     return k.pyramid;
   return build_pyramid(gray, k.scale_factor, levels);
-}
-
-// Sub-pixel offset of the minimum of a V-shaped cost sampled at -1, 0, +1 (c0 smallest).
-// Zero-mean SAD grows linearly with the shift away from its minimum, so two lines of opposite
-// slope through the three samples locate it without the bias a parabola has on a V.
-float vertex_offset(float cm, float c0, float cp) {
-  const float rise = std::max(cm, cp) - c0;
-  if (!(rise > 0)) return 0.0f;
-  return 0.5f * (cm - cp) / rise;
-}
-
-struct Refined {
-  float u_level = 0;  // column in the right level image (level px)
-  float cost = 0;     // best zero-mean SAD / left window contrast
-  bool ok = false;
-};
-
-constexpr int kMaxHalfWidth = 15, kMaxHalfHeight = 15, kMaxRange = 32;
-
-// Zero-mean SAD of the left window around (xl, y) against right windows centred on
-// (xr0 + d, y + dy), d in [-range, range]; dy is the sub-pixel vertical offset the pair's
-// geometry predicts, sampled by linear interpolation between rows. The minimum must lie
-// strictly inside the range; a V fit through it and its neighbours gives the sub-pixel column.
-Refined refine_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int xr0, float dy,
-                   int half_width, int half_height, int range) {
-  Refined out;
-  const int cols = 2 * half_width + 1, rows = 2 * half_height + 1, n = cols * rows;
-  const int span = 2 * range + cols, x_begin = xr0 - range - half_width;
-  const float yr = static_cast<float>(y - half_height) + dy;
-  const int y0 = static_cast<int>(std::floor(yr));
-  const float a = yr - static_cast<float>(y0);
-  if (y - half_height < 0 || y + half_height >= L.rows || xl - half_width < 0 ||
-      xl + half_width >= L.cols || x_begin < 0 || x_begin + span > R.cols || y0 < 0 ||
-      y0 + rows >= R.rows)
-    return out;
-
-  std::array<float, (2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)> left;
-  float sum_left = 0;
-  for (int r = 0; r < rows; ++r) {
-    const std::uint8_t* p = L.ptr<std::uint8_t>(y - half_height + r) + xl - half_width;
-    for (int c = 0; c < cols; ++c) {
-      left[r * cols + c] = p[c];
-      sum_left += p[c];
-    }
-  }
-  const float mean_left = sum_left / n;
-  float contrast = 0;
-  for (int k = 0; k < n; ++k) {
-    left[k] -= mean_left;
-    contrast += std::abs(left[k]);
-  }
-  // Right band, rows interpolated at the predicted offset; column sums give window means.
-  std::array<float, (2 * kMaxRange + 2 * kMaxHalfWidth + 1) * (2 * kMaxHalfHeight + 1)> band;
-  std::array<float, 2 * kMaxRange + 2 * kMaxHalfWidth + 1> column{};
-  for (int r = 0; r < rows; ++r) {
-    const std::uint8_t* p0 = R.ptr<std::uint8_t>(y0 + r) + x_begin;
-    const std::uint8_t* p1 = R.ptr<std::uint8_t>(y0 + r + 1) + x_begin;
-    float* b = band.data() + r * span;
-    for (int c = 0; c < span; ++c) {
-      b[c] = (1.0f - a) * p0[c] + a * p1[c];
-      column[c] += b[c];
-    }
-  }
-  std::array<float, 2 * kMaxRange + 1> cost;
-  int best = 0;
-  for (int d = 0; d <= 2 * range; ++d) {
-    float sum_right = 0;
-    for (int c = 0; c < cols; ++c) sum_right += column[d + c];
-    const float mean_right = sum_right / n;
-    float sad = 0;
-    for (int r = 0; r < rows; ++r) {
-      const float* b = band.data() + r * span + d;
-      const float* l = left.data() + r * cols;
-      for (int c = 0; c < cols; ++c) sad += std::abs(l[c] - (b[c] - mean_right));
-    }
-    cost[d] = sad;
-    if (sad < cost[best]) best = d;
-  }
-  if (best == 0 || best == 2 * range) return out;  // minimum on the border: no true minimum
-  const float delta = vertex_offset(cost[best - 1], cost[best], cost[best + 1]);
-  out.u_level = static_cast<float>(x_begin + half_width + best) + delta;
-  out.cost = cost[best] / (contrast + 1.0f);
-  out.ok = true;
-  return out;
 }
 
 }  // namespace
@@ -269,7 +187,7 @@ StereoMatches match_stereo(const Keypoints& left, const Keypoints& right,
       const float disparity0 = kl.pt.x - right.keypoints[best].pt.x;
       const float level_sy = static_cast<float>(size0.height) / L.rows;
       const float dy = dv_per_disparity * disparity0 / level_sy;
-      const Refined ref = refine_sad(L, R, cvRound(pl.x), cvRound(pl.y), cvRound(pr.x), dy,
+      const SadRefined ref = refine_sad(L, R, cvRound(pl.x), cvRound(pl.y), cvRound(pr.x), dy,
                                      half_width, half_height, options.refine_range);
       if (!ref.ok) continue;
       // The left window is centred on the rounded level pixel: shift by the rounding.

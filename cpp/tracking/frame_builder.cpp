@@ -37,25 +37,40 @@ cv::Mat static_class_mask(const cv::Mat& labels, const std::unordered_set<int>& 
 FrameBuilder::FrameBuilder(const geometry::StereoCamera& camera, const SlamOptions& options)
     : camera_(camera), stereo_options_(options.stereo), lidar_options_(options.lidar),
       extractor_(options.orb),
-      dynamic_classes_(options.tracking.dynamic_class_ids.begin(), options.tracking.dynamic_class_ids.end()) {}
+      dynamic_classes_(options.tracking.dynamic_class_ids.begin(), options.tracking.dynamic_class_ids.end()) {
+  if (options.visual_objects.enabled && options.visual_objects.extra_keypoints &&
+      options.visual_objects.extra_keypoints_max > 0)
+    object_keypoints_.emplace(options.orb, options.visual_objects);
+}
 
 FrameBuildReport FrameBuilder::build(int index, double timestamp, const cv::Mat& left,
                                      const cv::Mat& right, const cv::Mat& labels,
-                                     const Points3& points_c, Frame* out_frame) const {
+                                     const Points3& points_c, Frame* out_frame,
+                                     const cv::Mat& object_mask) const {
   check_image(left, "image_left", camera_);
   check_image(right, "image_right", camera_);
   if (left.size() != right.size()) throw std::invalid_argument("image_right: size differs from image_left");
   if (!labels.empty() && (labels.type() != CV_32SC1 || labels.size() != left.size()))
     throw std::invalid_argument("labels: expected int32 class ids of the image size");
+  if (!object_mask.empty() && (object_mask.type() != CV_8UC1 || object_mask.size() != left.size()))
+    throw std::invalid_argument("object_mask: expected uint8 of the image size");
 
   FrameBuildReport out;
   const cv::Mat gray_left = features::to_gray(left, /*rgb=*/true),
                 gray_right = features::to_gray(right, /*rgb=*/true);
   // Left and right pyramids are extracted on both cores, then matched along the rows.
-  const features::StereoFeatures stereo_features =
+  features::StereoFeatures stereo_features =
       features::extract_and_match(extractor_, gray_left, gray_right, camera_, stereo_options_);
   out.timings_ms.emplace_back("features", stereo_features.extract_ms);
   out.timings_ms.emplace_back("stereo", stereo_features.match_ms);
+  const size_t num_main = stereo_features.left.size();
+  if (object_keypoints_ && !object_mask.empty()) {
+    const auto start = std::chrono::steady_clock::now();
+    out.object_keypoints = object_keypoints_->extract(gray_left, object_mask, camera_, &stereo_features);
+    out.timings_ms.emplace_back(
+        "object_keypoints",
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
   const features::Keypoints& kp_left = stereo_features.left;
   const features::StereoMatches& stereo = stereo_features.matches;
 
@@ -81,6 +96,7 @@ FrameBuildReport FrameBuilder::build(int index, double timestamp, const cv::Mat&
       k.label[i] = labels.at<int>(v, u);
       frame.usable[i] = !dynamic_classes_.count(k.label[i]);  // eq. 3: static clusters only
     }
+    if (i >= num_main) frame.usable[i] = 0;  // extra keypoints lie on objects
   }
   if (lidar_options_.use_depth && points_c.rows() > 0) {
     const auto start = std::chrono::steady_clock::now();

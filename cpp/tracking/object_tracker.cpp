@@ -105,7 +105,8 @@ std::vector<ObjectTracker::Match> ObjectTracker::search_cluster(
     }
     Vec2 predicted;
     double radius;
-    if (p.last.frame == last_frame_ && flow_at(flow, p.last.uv, &predicted)) {
+    const bool by_flow = p.last.frame == last_frame_ && flow_at(flow, p.last.uv, &predicted);
+    if (by_flow) {
       radius = options_.flow_radius_px;  // eq. 4's search around the flow prediction
     } else if (in_front) {
       predicted = projected;
@@ -118,7 +119,10 @@ std::vector<ObjectTracker::Match> ObjectTracker::search_cluster(
     const double scale =
         scale_factors_[std::min<size_t>(std::max(p.last.octave, 0), scale_factors_.size() - 1)];
     frame.grid.query(predicted.x(), predicted.y(), radius * scale, &candidates);
-    int best = -1, best_distance = options_.max_hamming + 1;
+    // the flow has already located the point: a looser descriptor test only rejects
+    // keypoints of other surfaces inside the small window
+    const int max_distance = by_flow ? options_.flow_max_hamming : options_.max_hamming;
+    int best = -1, best_distance = max_distance + 1;
     for (int k : candidates) {
       if (claimed_by_[k] >= 0) continue;
       const int d = map::hamming(p.descriptor, frame.keypoints.descriptors[k]);
@@ -240,6 +244,7 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     }
   }
   if (valid && options_.window_frames >= 3) refine_window(c);
+  if (valid) recenter(c);
   if (instance >= 0) {
     cluster.instance = instance;
     const auto cls = instance_class_.find(instance);
@@ -391,6 +396,22 @@ void ObjectTracker::refine_window(int c) {
     track.frames[first + r].xi = track.Pi * geometry::twist_between(w.T_w_o[r], w.T_w_o[r + 1]);
   cluster.velocity = track.frames[first + rows - 2].xi;
   for (size_t k = 0; k < used.size(); ++k) cluster.points[used[k]].X_o = w.X_o[k];
+}
+
+void ObjectTracker::recenter(int c) {
+  if (!(options_.recenter_distance_m > 0)) return;
+  objects::ObjectCluster& cluster = clusters_[c];
+  std::vector<Vec3> confirmed;
+  for (const objects::ObjectPoint& p : cluster.points)
+    if (p.found >= 2) confirmed.push_back(p.X_o);
+  if (static_cast<int>(confirmed.size()) < options_.min_inliers) return;
+  const Vec3 centre = median_point(confirmed);
+  if (centre.norm() <= options_.recenter_distance_m) return;
+  // T_w_o' = T_w_o T_o_o' with T_o_o' a translation by centre: the twists of eq. 2 act on the
+  // left (T_w_o(i+1) = exp(Pi xi) T_w_o(i)), so they are unchanged
+  for (objects::TrackFrame& row : tracks_[c].frames)
+    row.T_w_o.topRightCorner<3, 1>() += row.T_w_o.topLeftCorner<3, 3>() * centre;
+  for (objects::ObjectPoint& p : cluster.points) p.X_o -= centre;
 }
 
 void ObjectTracker::cull(objects::ObjectCluster& cluster) const {

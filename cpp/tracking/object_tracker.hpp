@@ -84,6 +84,9 @@ class ObjectTracker {
   void cull(objects::ObjectCluster& cluster) const;
   // e_dyna + e_const over the cluster's last window_frames frames (eq. 9), camera fixed.
   void refine_window(int c);
+  // Moves the object frame's origin to the median of the cluster's confirmed points when it
+  // lies farther than recenter_distance_m from it (every pose and point re-expressed).
+  void recenter(int c);
   objects::TwistObservation observation(const objects::ObjectPoint& p, const Frame& frame,
                                         int keypoint) const;
 

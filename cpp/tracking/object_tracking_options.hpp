@@ -20,6 +20,7 @@ struct ObjectTrackingOptions {
   double projection_radius_px = 12; // ... around the motion-model projection (no flow)
   double refine_radius_px = 3;      // ... of the second pass, around the estimated pose
   int max_hamming = 50;             // bits
+  int flow_max_hamming = 80;        // bits, for keypoints searched around the flow prediction
   int min_new_cluster_points = 10;  // stereo keypoints inside a new instance mask
   int min_shared_points = 5;        // matched points an instance must share with a cluster
   double min_mask_overlap = 0.5;    // fraction of projected cluster points inside the mask
@@ -36,6 +37,17 @@ struct ObjectTrackingOptions {
   double const_sigma_translation = 0.05;  // m/frame, change of the translational twist
   double const_sigma_rotation = 0.005;    // rad/frame, change of the rotational twist
   int window_iterations = 5;        // Ceres iterations of the window
+  double recenter_distance_m = 0.5; // origin moved to the points' median beyond this (0: never)
+  // extra keypoints inside object masks (tracking/object_keypoints.hpp)
+  bool extra_keypoints = true;
+  int extra_keypoints_max = 1000;     // per frame, over all object masks
+  int extra_keypoint_levels = 2;      // pyramid levels of the pass (<= the frame's)
+  int extra_fast_threshold = 7;       // grey levels
+  int extra_cell_px = 10;             // FAST retry grid cell (level px)
+  double extra_min_spacing_px = 3;    // from every keypoint already in the frame
+  double extra_min_depth_m = 1.5;     // SAD scan: closest depth searched
+  double extra_max_sad_cost = 0.7;    // SAD scan: normalised cost accepted
+  double extra_sad_uniqueness = 0.7;  // SAD scan: best / second-best minimum
 };
 
 template <typename Visit>
@@ -48,6 +60,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("projection_radius_px", o.projection_radius_px, 0.0, 2000.0);
   visit("refine_radius_px", o.refine_radius_px, 0.0, 2000.0);
   visit("max_hamming", o.max_hamming, 0, 256);  // bits of a 256-bit descriptor
+  visit("flow_max_hamming", o.flow_max_hamming, 0, 256);
   visit("min_new_cluster_points", o.min_new_cluster_points, 3, 100000);
   visit("min_shared_points", o.min_shared_points, 1, 100000);
   visit("min_mask_overlap", o.min_mask_overlap, 0.0, 1.0);
@@ -64,6 +77,16 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("const_sigma_translation", o.const_sigma_translation, 1e-6, 100.0);
   visit("const_sigma_rotation", o.const_sigma_rotation, 1e-6, 10.0);
   visit("window_iterations", o.window_iterations, 1, 1000);
+  visit("recenter_distance_m", o.recenter_distance_m, 0.0, 1000.0);
+  visit("extra_keypoints", o.extra_keypoints, 0, 1);
+  visit("extra_keypoints_max", o.extra_keypoints_max, 0, 100000);
+  visit("extra_keypoint_levels", o.extra_keypoint_levels, 1, 32);
+  visit("extra_fast_threshold", o.extra_fast_threshold, 1, 254);  // grey levels of 8 bits
+  visit("extra_cell_px", o.extra_cell_px, 8, 4096);  // as OrbOptions::cell_size
+  visit("extra_min_spacing_px", o.extra_min_spacing_px, 0.0, 100.0);
+  visit("extra_min_depth_m", o.extra_min_depth_m, 0.1, 1000.0);
+  visit("extra_max_sad_cost", o.extra_max_sad_cost, 1e-3, 10.0);
+  visit("extra_sad_uniqueness", o.extra_sad_uniqueness, 0.01, 1.0);
 }
 
 }  // namespace twistslam::tracking

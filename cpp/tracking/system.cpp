@@ -1,6 +1,7 @@
 #include "tracking/system.hpp"
 
 #include <chrono>
+#include <stdexcept>
 #include <utility>
 
 #include "geometry/se3.hpp"
@@ -58,7 +59,16 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
                           const cv::Mat& instances, const cv::Mat& flow) {
   TrackResult result;
   Frame frame;
-  FrameBuildReport built = frame_builder_.build(index, timestamp, left, right, labels, points_c, &frame);
+  const ObjectTrackingOptions& vo = options_.visual_objects;
+  cv::Mat object_mask;  // where extra keypoints are extracted (object instances)
+  if (!instances.empty() && vo.enabled && vo.extra_keypoints) {
+    if (instances.type() != CV_32SC1 || instances.size() != left.size())
+      throw std::invalid_argument("instances: expected int32 instance ids of the image size");
+    if (labels.empty() || labels.size() == instances.size())
+      object_mask = object_class_mask(instances, labels, vo.object_class_ids);
+  }
+  FrameBuildReport built =
+      frame_builder_.build(index, timestamp, left, right, labels, points_c, &frame, object_mask);
   result.timings_ms = std::move(built.timings_ms);
   result.num_lidar_depth = built.num_lidar_depth;
   StageTimer timer(&result);

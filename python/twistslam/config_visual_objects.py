@@ -44,6 +44,11 @@ class VisualObjectsConfig:
         3.0, "second pass: window around the projection with the estimated twist", "px")
     max_hamming: int = param(50, "ORB-SLAM2's matching threshold; cars show few, similar "
                              "corners, the twist LM's Huber loss takes the rest", "bits")
+    flow_max_hamming: int = param(
+        80, "descriptor distance accepted around the flow prediction: the flow has located "
+        "the point; object corners change with viewpoint and only 59 % of the flow-predicted "
+        "keypoints are within 50 bits (85 % within 80; simulator, urban seed 0)", "bits",
+        lo=0, hi=256)
     min_new_cluster_points: int = param(
         10, "stereo keypoints inside a new instance mask needed to start a cluster", "points")
     min_shared_points: int = param(
@@ -75,3 +80,28 @@ class VisualObjectsConfig:
     const_sigma_rotation: float = param(
         0.005, "change of the rotational twist between frames (0.3 deg/frame)", "rad/frame")
     window_iterations: int = param(5, "Ceres iterations of the window (from a close start)")
+    recenter_distance_m: float = param(
+        0.5, "the object frame's origin moves to the median of the cluster's confirmed points "
+        "when farther than this: a cluster born at 40 m sits metres off in depth until its "
+        "points are refined closer (0: never)", "m")
+    extra_keypoints: bool = param(
+        True, "a second, denser ORB pass inside the object masks, and a SAD scan along the "
+        "row for every object keypoint without stereo depth (paper: small and far objects "
+        "keep enough points)")
+    extra_keypoints_max: int = param(
+        1000, "extra keypoints per frame over all object masks", "keypoints")
+    extra_keypoint_levels: int = param(
+        2, "pyramid levels of the extra pass: far objects are small, coarse levels hold "
+        "nothing of them", "levels", lo=1, hi=32)
+    extra_fast_threshold: int = param(
+        7, "FAST threshold of the extra pass (the frame's is 20): car paint is low-contrast",
+        "grey levels", lo=1, hi=254)
+    extra_cell_px: int = param(10, "FAST retry cell of the extra pass", "px", lo=8, hi=4096)
+    extra_min_spacing_px: float = param(
+        3.0, "an extra keypoint this close to a keypoint of the frame is dropped", "px")
+    extra_min_depth_m: float = param(
+        1.5, "closest depth of the SAD scan (its cost grows with the disparity range)", "m")
+    extra_max_sad_cost: float = param(
+        0.7, "SAD scan: accepted zero-mean SAD over the window's contrast")
+    extra_sad_uniqueness: float = param(
+        0.7, "SAD scan: the best cost must be below this times the second-best minimum")

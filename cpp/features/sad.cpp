@@ -1,0 +1,140 @@
+#include "features/sad.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace twistslam::features {
+
+float vertex_offset(float cm, float c0, float cp) {
+  const float rise = std::max(cm, cp) - c0;
+  if (!(rise > 0)) return 0.0f;
+  return 0.5f * (cm - cp) / rise;
+}
+
+SadRefined refine_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int xr0, float dy,
+                      int half_width, int half_height, int range) {
+  SadRefined out;
+  const int cols = 2 * half_width + 1, rows = 2 * half_height + 1, n = cols * rows;
+  const int span = 2 * range + cols, x_begin = xr0 - range - half_width;
+  const float yr = static_cast<float>(y - half_height) + dy;
+  const int y0 = static_cast<int>(std::floor(yr));
+  const float a = yr - static_cast<float>(y0);
+  if (y - half_height < 0 || y + half_height >= L.rows || xl - half_width < 0 ||
+      xl + half_width >= L.cols || x_begin < 0 || x_begin + span > R.cols || y0 < 0 ||
+      y0 + rows >= R.rows)
+    return out;
+
+  std::array<float, (2 * kMaxSadHalfWidth + 1) * (2 * kMaxSadHalfHeight + 1)> left;
+  float sum_left = 0;
+  for (int r = 0; r < rows; ++r) {
+    const std::uint8_t* p = L.ptr<std::uint8_t>(y - half_height + r) + xl - half_width;
+    for (int c = 0; c < cols; ++c) {
+      left[r * cols + c] = p[c];
+      sum_left += p[c];
+    }
+  }
+  const float mean_left = sum_left / n;
+  float contrast = 0;
+  for (int k = 0; k < n; ++k) {
+    left[k] -= mean_left;
+    contrast += std::abs(left[k]);
+  }
+  // Right band, rows interpolated at the predicted offset; column sums give window means.
+  std::array<float, (2 * kMaxSadRange + 2 * kMaxSadHalfWidth + 1) * (2 * kMaxSadHalfHeight + 1)> band;
+  std::array<float, 2 * kMaxSadRange + 2 * kMaxSadHalfWidth + 1> column{};
+  for (int r = 0; r < rows; ++r) {
+    const std::uint8_t* p0 = R.ptr<std::uint8_t>(y0 + r) + x_begin;
+    const std::uint8_t* p1 = R.ptr<std::uint8_t>(y0 + r + 1) + x_begin;
+    float* b = band.data() + r * span;
+    for (int c = 0; c < span; ++c) {
+      b[c] = (1.0f - a) * p0[c] + a * p1[c];
+      column[c] += b[c];
+    }
+  }
+  std::array<float, 2 * kMaxSadRange + 1> cost;
+  int best = 0;
+  for (int d = 0; d <= 2 * range; ++d) {
+    float sum_right = 0;
+    for (int c = 0; c < cols; ++c) sum_right += column[d + c];
+    const float mean_right = sum_right / n;
+    float sad = 0;
+    for (int r = 0; r < rows; ++r) {
+      const float* b = band.data() + r * span + d;
+      const float* l = left.data() + r * cols;
+      for (int c = 0; c < cols; ++c) sad += std::abs(l[c] - (b[c] - mean_right));
+    }
+    cost[d] = sad;
+    if (sad < cost[best]) best = d;
+  }
+  if (best == 0 || best == 2 * range) return out;  // minimum on the border: no true minimum
+  const float delta = vertex_offset(cost[best - 1], cost[best], cost[best + 1]);
+  out.u_level = static_cast<float>(x_begin + half_width + best) + delta;
+  out.cost = cost[best] / (contrast + 1.0f);
+  out.ok = true;
+  return out;
+}
+
+SadScan scan_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int x_first, int x_last,
+                 int half_width, int half_height) {
+  SadScan out;
+  out.second_cost = std::numeric_limits<float>::infinity();
+  const int cols = 2 * half_width + 1, rows = 2 * half_height + 1, n = cols * rows;
+  if (y - half_height < 0 || y + half_height >= L.rows || y + half_height >= R.rows ||
+      xl - half_width < 0 || xl + half_width >= L.cols)
+    return out;
+  x_first = std::max(x_first, half_width);
+  x_last = std::min(x_last, R.cols - 1 - half_width);
+  if (x_first > x_last) return out;
+
+  std::array<float, (2 * kMaxSadHalfWidth + 1) * (2 * kMaxSadHalfHeight + 1)> left;
+  float sum_left = 0;
+  for (int r = 0; r < rows; ++r) {
+    const std::uint8_t* p = L.ptr<std::uint8_t>(y - half_height + r) + xl - half_width;
+    for (int c = 0; c < cols; ++c) sum_left += left[r * cols + c] = p[c];
+  }
+  const float mean_left = sum_left / n;
+  float contrast = 0;
+  for (int k = 0; k < n; ++k) contrast += std::abs(left[k] -= mean_left);
+
+  // column sums of the right band give each window's mean in O(1) per column
+  const int x_begin = x_first - half_width, span = x_last - x_first + cols;
+  std::vector<float> column(span, 0.0f);
+  for (int r = 0; r < rows; ++r) {
+    const std::uint8_t* p = R.ptr<std::uint8_t>(y - half_height + r) + x_begin;
+    for (int c = 0; c < span; ++c) column[c] += p[c];
+  }
+  std::vector<float> cost(x_last - x_first + 1);
+  int best = 0;
+  for (int d = 0; d < static_cast<int>(cost.size()); ++d) {
+    float sum_right = 0;
+    for (int c = 0; c < cols; ++c) sum_right += column[d + c];
+    const float mean_right = sum_right / n;
+    float sad = 0;
+    for (int r = 0; r < rows; ++r) {
+      const std::uint8_t* b = R.ptr<std::uint8_t>(y - half_height + r) + x_begin + d;
+      const float* l = left.data() + r * cols;
+      for (int c = 0; c < cols; ++c) sad += std::abs(l[c] - (b[c] - mean_right));
+    }
+    cost[d] = sad;
+    if (sad < cost[best]) best = d;
+  }
+  // the second-best local minimum: the best one's own valley (its slopes) is no competitor
+  float second = std::numeric_limits<float>::infinity();
+  const int m = static_cast<int>(cost.size());
+  for (int d = 0; d < m; ++d) {
+    if (std::abs(d - best) < 2) continue;
+    const bool minimum = (d == 0 || cost[d] <= cost[d - 1]) && (d == m - 1 || cost[d] <= cost[d + 1]);
+    if (minimum) second = std::min(second, cost[d]);
+  }
+  const float norm = contrast + 1.0f;
+  out.best_column = x_first + best;
+  out.best_cost = cost[best] / norm;
+  out.second_cost = second / norm;
+  return out;
+}
+
+}  // namespace twistslam::features

@@ -1,0 +1,92 @@
+#include "features/stereo_search.hpp"
+
+#include <opencv2/core/utility.hpp>
+
+#include <atomic>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "features/sad.hpp"
+
+namespace twistslam::features {
+
+void check_options(const StereoSearchOptions& o) {
+  auto fail = [](const std::string& what) {
+    throw std::invalid_argument("StereoSearchOptions: " + what);
+  };
+  if (!(o.min_depth > 0) || !(o.max_depth > o.min_depth) || !(o.max_depth <= 1e4))
+    fail("need 0 < min_depth < max_depth <= 10000 m");
+  if (!(o.max_cost > 0)) fail("max_cost must be > 0");
+  if (!(o.uniqueness > 0 && o.uniqueness <= 1)) fail("uniqueness must be in (0, 1]");
+  if (o.patch_radius < 1 || o.patch_radius > kMaxSadHalfWidth) fail("patch_radius must be in [1, 15]");
+  if (o.patch_half_height < 0 || o.patch_half_height > kMaxSadHalfHeight)
+    fail("patch_half_height must be in [0, 15]");
+}
+
+int search_stereo(const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
+                  const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
+                  const StereoSearchOptions& options, const std::vector<int>& which,
+                  StereoMatches* matches) {
+  check_options(options);
+  const int N = static_cast<int>(left.size());
+  if (static_cast<int>(matches->u_right.size()) != N || static_cast<int>(matches->depth.size()) != N)
+    throw std::invalid_argument("search_stereo: matches must have one entry per left keypoint");
+  if (pyramid_left.empty() || pyramid_right.empty() || pyramid_left[0].size() != pyramid_right[0].size())
+    throw std::invalid_argument("search_stereo: left and right pyramids missing or of different sizes");
+  if (!(camera.baseline > 0) || !(camera.fx > 0))
+    throw std::invalid_argument("search_stereo: the camera needs fx > 0 and a positive baseline");
+  for (int i : which) {
+    if (i < 0 || i >= N) throw std::invalid_argument("search_stereo: keypoint index out of range");
+    const int o = left.keypoints[i].octave;
+    if (o < 0 || o >= static_cast<int>(pyramid_left.size()) || o >= static_cast<int>(pyramid_right.size()))
+      throw std::invalid_argument("search_stereo: keypoint octave exceeds the pyramids");
+  }
+  const cv::Size size0 = pyramid_left[0].size();
+  const double fb = camera.fx * camera.baseline;
+  const float offset = static_cast<float>(camera.disparity_offset);
+  const float min_disparity = static_cast<float>(fb / options.max_depth) - offset;
+  const float max_disparity = static_cast<float>(fb / options.min_depth) - offset;
+  // the right row of a point drifts with its disparity on KITTI (see match_stereo)
+  const float dv_per_disparity = static_cast<float>(
+      camera.fy / camera.fx * (camera.t_right.y() - camera.t_left.y()) / camera.baseline);
+  // sub-pixel refinement around the scan's integer minimum: +-2 level px
+  constexpr int kRefineRange = 2;
+
+  std::atomic<int> found{0};
+  auto search_range = [&](const cv::Range& range) {
+    for (int j = range.start; j < range.end; ++j) {
+      const int i = which[j];
+      const cv::KeyPoint& kl = left.keypoints[i];
+      const cv::Mat& L = pyramid_left[kl.octave];
+      const cv::Mat& R = pyramid_right[kl.octave];
+      const float scale = static_cast<float>(size0.width) / L.cols;
+      const cv::Point2f pl = image_to_level(kl.pt, size0, L.size());
+      const int xl = cvRound(pl.x), y = cvRound(pl.y);
+      // right columns (level px) of the disparity range
+      const int x_first = static_cast<int>(std::floor(pl.x - max_disparity / scale));
+      const int x_last = static_cast<int>(std::ceil(pl.x - min_disparity / scale));
+      const SadScan scan = scan_sad(L, R, xl, y, x_first, x_last, options.patch_radius,
+                                    options.patch_half_height);
+      if (scan.best_column < 0 || !(scan.best_cost <= options.max_cost) ||
+          !(scan.best_cost < options.uniqueness * scan.second_cost))
+        continue;
+      const float level_sy = static_cast<float>(size0.height) / L.rows;
+      const float dy = dv_per_disparity * (pl.x - scan.best_column) * scale / level_sy;
+      const SadRefined ref = refine_sad(L, R, xl, y, scan.best_column, dy, options.patch_radius,
+                                        options.patch_half_height, kRefineRange);
+      if (!ref.ok) continue;
+      const float u_level = ref.u_level + (pl.x - static_cast<float>(xl));
+      const float u_right = (u_level + 0.5f) * scale - 0.5f;
+      const float disparity = kl.pt.x - u_right;
+      if (!(disparity >= min_disparity && disparity <= max_disparity)) continue;
+      matches->u_right[i] = u_right;
+      matches->depth[i] = static_cast<float>(fb / (disparity + offset));
+      ++found;
+    }
+  };
+  cv::parallel_for_(cv::Range(0, static_cast<int>(which.size())), search_range, 2.0);
+  return found.load();
+}
+
+}  // namespace twistslam::features

@@ -1,0 +1,42 @@
+#pragma once
+// Stereo depth for left keypoints that have no right keypoint to match: a zero-mean SAD scan
+// along the row over the whole disparity range on the keypoint's pyramid level, kept when the
+// minimum is distinct (uniqueness against the second-best minimum) and its normalised cost
+// low, then refined to sub-pixel like the descriptor matches (features/sad.hpp).
+// Small and far objects are where this matters: a car at 40 m covers ~40 x 30 px, where the
+// right image's bucketed keypoints rarely hold the partner of a left corner (paper: extra
+// keypoints keep small objects tracked).
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+#include "features/orb.hpp"
+#include "features/stereo.hpp"
+#include "geometry/stereo_camera.hpp"
+
+namespace twistslam::features {
+
+struct StereoSearchOptions {
+  float min_depth = 1.5f;   // m: closest depth searched (fx b / 1.5 ~ 257 px on KITTI)
+  float max_depth = 60.0f;  // m: farthest (object points beyond are not used)
+  // Normalised zero-mean SAD (SAD / left window contrast) above which no depth is given.
+  float max_cost = 0.7f;
+  // The best cost must be below uniqueness x the best cost >= 2 px away from it.
+  float uniqueness = 0.7f;
+  int patch_radius = 7;       // half width of the SAD window (level px), as StereoOptions
+  int patch_half_height = 2;  // half height (level px)
+};
+
+// Throws std::invalid_argument naming the bad option.
+void check_options(const StereoSearchOptions& options);
+
+// Fills matches->u_right / depth of left keypoint i for every i in `which` that the scan
+// accepts (others keep their value). pyramid_left / pyramid_right: the images' pyramids with
+// at least the keypoints' octaves (Keypoints::pyramid of the left and right extraction).
+// Returns how many got a depth. Throws std::invalid_argument on bad sizes or indices.
+int search_stereo(const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
+                  const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
+                  const StereoSearchOptions& options, const std::vector<int>& which,
+                  StereoMatches* matches);
+
+}  // namespace twistslam::features

@@ -1,0 +1,134 @@
+#include "tracking/object_keypoints.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace twistslam::tracking {
+namespace {
+
+features::OrbOptions mask_orb_options(const features::OrbOptions& main, const ObjectTrackingOptions& o) {
+  features::OrbOptions m = main;
+  m.num_features = o.extra_keypoints_max;
+  m.num_levels = std::min(main.num_levels, o.extra_keypoint_levels);
+  m.fast_threshold = std::max(o.extra_fast_threshold, 1);
+  m.min_fast_threshold = std::min(main.min_fast_threshold, m.fast_threshold);
+  m.cell_size = o.extra_cell_px;
+  return m;
+}
+
+// Occupancy of existing keypoints on a grid of spacing-sized cells: a candidate is too close
+// when a keypoint of its own or a neighbouring cell lies within the spacing.
+class SpacingGrid {
+ public:
+  SpacingGrid(int width, int height, double spacing)
+      : cell_(std::max(spacing, 1.0)), cols_(static_cast<int>(width / cell_) + 1),
+        rows_(static_cast<int>(height / cell_) + 1), cells_(static_cast<size_t>(cols_) * rows_) {}
+  void add(const cv::Point2f& p) {
+    const int c = cx(p.x), r = cy(p.y);
+    if (c >= 0 && r >= 0 && c < cols_ && r < rows_) cells_[static_cast<size_t>(r) * cols_ + c].push_back(p);
+  }
+  bool near(const cv::Point2f& p) const {
+    for (int r = cy(p.y) - 1; r <= cy(p.y) + 1; ++r)
+      for (int c = cx(p.x) - 1; c <= cx(p.x) + 1; ++c) {
+        if (c < 0 || r < 0 || c >= cols_ || r >= rows_) continue;
+        for (const cv::Point2f& q : cells_[static_cast<size_t>(r) * cols_ + c])
+          if (std::hypot(p.x - q.x, p.y - q.y) < cell_) return true;
+      }
+    return false;
+  }
+
+ private:
+  int cx(float x) const { return static_cast<int>(std::floor(x / cell_)); }
+  int cy(float y) const { return static_cast<int>(std::floor(y / cell_)); }
+  double cell_;
+  int cols_, rows_;
+  std::vector<std::vector<cv::Point2f>> cells_;
+};
+
+}  // namespace
+
+cv::Mat object_class_mask(const cv::Mat& instances, const cv::Mat& labels,
+                          const std::vector<int>& object_class_ids) {
+  if (instances.type() != CV_32SC1) throw std::invalid_argument("instances: expected int32 ids");
+  if (!labels.empty() && (labels.type() != CV_32SC1 || labels.size() != instances.size()))
+    throw std::invalid_argument("labels: expected int32 class ids of the instances' size");
+  int max_id = 0;
+  for (int id : object_class_ids) max_id = std::max(max_id, id);
+  std::vector<std::uint8_t> is_object(static_cast<size_t>(max_id) + 1, 0);
+  for (int id : object_class_ids)
+    if (id >= 0) is_object[id] = 1;
+  cv::Mat mask(instances.size(), CV_8UC1, cv::Scalar(0));
+  for (int v = 0; v < instances.rows; ++v) {
+    const int* inst = instances.ptr<int>(v);
+    const int* cls = labels.empty() ? nullptr : labels.ptr<int>(v);
+    std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+    for (int u = 0; u < instances.cols; ++u) {
+      if (inst[u] <= 0) continue;
+      const int c = cls ? cls[u] : 0;
+      m[u] = (!cls || (c >= 0 && c <= max_id && is_object[c])) ? 255 : 0;
+    }
+  }
+  return mask;
+}
+
+ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& main,
+                                                 const ObjectTrackingOptions& options)
+    : extractor_(mask_orb_options(main, options)), min_spacing_px_(options.extra_min_spacing_px) {
+  search_.min_depth = static_cast<float>(options.extra_min_depth_m);
+  search_.max_depth = static_cast<float>(options.max_depth_m);
+  search_.max_cost = static_cast<float>(options.extra_max_sad_cost);
+  search_.uniqueness = static_cast<float>(options.extra_sad_uniqueness);
+  features::check_options(search_);
+}
+
+ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
+                                                      const cv::Mat& object_mask,
+                                                      const geometry::StereoCamera& camera,
+                                                      features::StereoFeatures* f) const {
+  ObjectKeypointReport report;
+  if (object_mask.empty() || cv::countNonZero(object_mask) == 0) return report;
+  features::Keypoints& left = f->left;
+  const int n_old = static_cast<int>(left.size());
+  if (static_cast<int>(f->matches.depth.size()) != n_old)
+    throw std::invalid_argument("ObjectKeypointExtractor: matches do not belong to the keypoints");
+
+  features::Keypoints extra = extractor_.extract(gray_left, object_mask);
+  SpacingGrid grid(gray_left.cols, gray_left.rows, min_spacing_px_);
+  for (const cv::KeyPoint& k : left.keypoints) grid.add(k.pt);
+  std::vector<cv::Mat> rows;
+  for (int j = 0; j < static_cast<int>(extra.size()); ++j) {
+    const cv::KeyPoint& k = extra.keypoints[j];
+    if (grid.near(k.pt)) continue;
+    grid.add(k.pt);
+    left.keypoints.push_back(k);
+    rows.push_back(extra.descriptors.row(j));
+  }
+  report.num_added = static_cast<int>(rows.size());
+  if (!rows.empty()) {
+    cv::Mat added;
+    cv::vconcat(rows, added);
+    if (left.descriptors.empty()) left.descriptors = added;
+    else cv::vconcat(left.descriptors, added, left.descriptors);
+  }
+  f->matches.u_right.resize(left.size(), -1.0f);
+  f->matches.depth.resize(left.size(), -1.0f);
+
+  // every object keypoint without depth: the new ones and the main pass's unmatched ones
+  std::vector<int> which;
+  for (int i = 0; i < static_cast<int>(left.size()); ++i) {
+    if (f->matches.depth[i] > 0) continue;
+    const cv::Point& p = cv::Point(cvRound(left.keypoints[i].pt.x), cvRound(left.keypoints[i].pt.y));
+    if (p.x < 0 || p.y < 0 || p.x >= object_mask.cols || p.y >= object_mask.rows) continue;
+    if (object_mask.at<std::uint8_t>(p.y, p.x)) which.push_back(i);
+  }
+  if (which.empty()) return report;
+  const std::vector<cv::Mat>& pyr_left = left.pyramid.empty() ? extra.pyramid : left.pyramid;
+  if (f->right.pyramid.empty())
+    throw std::invalid_argument("ObjectKeypointExtractor: the right pyramid was not kept");
+  report.num_new_depth =
+      features::search_stereo(left, pyr_left, f->right.pyramid, camera, search_, which, &f->matches);
+  return report;
+}
+
+}  // namespace twistslam::tracking

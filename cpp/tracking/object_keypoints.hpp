@@ -1,0 +1,49 @@
+#pragma once
+// Extra keypoints inside object masks (paper, "Clusters creation": small and far objects keep
+// enough points). The frame's ORB budget is spread over the whole image, so a car at 40 m
+// (~40 x 30 px) gets a handful of corners and the stereo matcher finds a partner for few of
+// them. Here a second, denser ORB pass runs inside the instance masks of the object classes,
+// and every object keypoint without depth (new or from the main pass) gets one from a SAD
+// scan along the row (features/stereo_search.hpp).
+#include <opencv2/core/mat.hpp>
+
+#include <vector>
+
+#include "features/orb.hpp"
+#include "features/stereo.hpp"
+#include "features/stereo_search.hpp"
+#include "geometry/stereo_camera.hpp"
+#include "tracking/object_tracking_options.hpp"
+
+namespace twistslam::tracking {
+
+struct ObjectKeypointReport {
+  int num_added = 0;      // new keypoints appended to the left keypoints
+  int num_new_depth = 0;  // object keypoints (new or old) that the SAD scan gave a depth
+};
+
+// CV_8UC1 mask, 255 on pixels of an instance (instances > 0) whose class (labels; any class
+// when labels is empty) is in object_class_ids. Both CV_32SC1 of one size.
+cv::Mat object_class_mask(const cv::Mat& instances, const cv::Mat& labels,
+                          const std::vector<int>& object_class_ids);
+
+class ObjectKeypointExtractor {
+ public:
+  // main: the frame's ORB options (scale factor and levels are shared, so octaves agree).
+  ObjectKeypointExtractor(const features::OrbOptions& main, const ObjectTrackingOptions& options);
+
+  // Appends to features->left (keypoints, descriptors) and features->matches the object
+  // keypoints farther than min spacing from every existing left keypoint, then searches the
+  // depth of every object keypoint that has none. Needs the left and right pyramids of
+  // extract_and_match. Keypoints at index >= the old size are the new ones.
+  ObjectKeypointReport extract(const cv::Mat& gray_left, const cv::Mat& object_mask,
+                               const geometry::StereoCamera& camera,
+                               features::StereoFeatures* features) const;
+
+ private:
+  features::OrbExtractor extractor_;
+  features::StereoSearchOptions search_;
+  double min_spacing_px_;
+};
+
+}  // namespace twistslam::tracking
