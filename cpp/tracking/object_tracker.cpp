@@ -202,10 +202,22 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
   if (matches.size() > before && static_cast<int>(matches.size()) >= options_.min_inliers)
     est = estimate(est.valid ? est.xi : Vec6(track.Pi * cluster.velocity));
   const bool valid = est.valid && est.num_inliers >= options_.min_inliers;
+  // Lost its points while its instance is still associated: new points from the instance,
+  // same track. Otherwise the instance stays claimed by a failing cluster until it dies
+  // (max_misses frames) and only then starts a new track: a gap and a fragmented track.
+  Mat4 T_w_o_reseed = T_w_o_pred;
+  const bool reseeded = !valid && instance >= 0 && options_.reseed_after_misses > 0 &&
+                        track.misses + 1 >= options_.reseed_after_misses &&
+                        reseed(c, frame, instance, &T_w_o_reseed);
 
   objects::TrackFrame row;
   row.frame = frame.index;
-  if (valid) {
+  if (reseeded) {
+    row.T_w_o = T_w_o_reseed;
+    track.last().xi = track.Pi * geometry::twist_between(T_w_o_prev, T_w_o_reseed);
+    track.misses = 0;
+    row.detected = false;
+  } else if (valid) {
     row.T_w_o = est.T_w_o;
     track.last().xi = est.xi;  // eq. 2: T_w_o(i+1) = exp(Pi xi_i) T_w_o(i)
     cluster.velocity = est.xi;
@@ -221,8 +233,9 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     track.state = track.misses > options_.max_misses ? objects::TrackState::kDead
                                                       : objects::TrackState::kLost;
   }
-  row.reported = valid;
+  row.reported = valid || reseeded;
   track.frames.push_back(row);
+  if (reseeded) return false;  // fresh points: no statistics, window or new points this frame
 
   // point statistics: visible where predicted inside the image, found where an inlier
   const Mat4 T_c_o = frame.T_c_w * row.T_w_o;
@@ -306,6 +319,38 @@ void ObjectTracker::add_points(int c, const Frame& frame, int instance) {
     cluster.points.push_back(p);
     claimed_by_[k] = c;
   }
+}
+
+bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o) {
+  const auto fresh = free_instance_points(frame, instance);
+  if (static_cast<int>(fresh.size()) < options_.min_new_cluster_points) return false;
+  std::vector<Vec3> X;
+  for (const auto& f : fresh) X.push_back(f.second);
+  const Vec3 median = median_point(X);
+  std::vector<std::pair<int, Vec3>> kept;
+  Vec3 centroid = Vec3::Zero();
+  for (const auto& f : fresh)
+    if ((f.second - median).norm() <= options_.max_point_spread_m) kept.push_back(f), centroid += f.second;
+  if (static_cast<int>(kept.size()) < options_.min_new_cluster_points) return false;
+  centroid /= static_cast<double>(kept.size());
+  objects::ObjectCluster& cluster = clusters_[c];
+  // a cluster without a velocity yet (it failed in its second frame) has no prediction worth
+  // keeping: its origin moves to the new points' centroid, as a new cluster's would
+  if (cluster.velocity.isZero()) T_w_o->topRightCorner<3, 1>() = centroid;
+  const Mat4 T_o_w = geometry::se3_inverse(*T_w_o);
+  cluster.points.clear();
+  for (const auto& [k, X_w] : kept) {
+    if (static_cast<int>(cluster.points.size()) >= options_.max_points) break;
+    objects::ObjectPoint p;
+    p.X_o = transform(T_o_w, X_w);
+    p.descriptor = frame.keypoints.descriptors[k];
+    observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
+            options_.window_frames);
+    p.class_votes.add(frame.keypoints.label[k]);
+    cluster.points.push_back(p);
+    claimed_by_[k] = c;
+  }
+  return true;
 }
 
 bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id, const Vec3& up_w) {

@@ -59,6 +59,10 @@ class VisualObjectsConfig:
                              "motion; 6 leave a margin against a wrong minimal fit)", "points")
     max_misses: int = param(5, "frames without a valid twist before the track ends "
                             "(predicted meanwhile)", "frames")
+    reseed_after_misses: int = param(
+        1, "failed frames after which a cluster whose instance is still associated takes "
+        "that instance's stereo points as its new points (same track); 0: never (the track "
+        "fails until it dies and the instance starts a new one)", "frames")
     max_point_spread_m: float = param(
         4.0, "new points farther than this from the cluster's median point are dropped "
         "(a car is <= 5.2 m long; masks bleed onto the background)", "m")
