@@ -1,0 +1,334 @@
+// The descriptor-free stereo search (features/stereo_search.hpp) and the zero-mean SAD scan it
+// is built on (features/sad.hpp): rows with a known integer shift, a periodic texture, and
+// rendered planes at known depths seen by KITTI 0000's cameras 2 and 3.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "features/sad.hpp"
+#include "features/stereo_search.hpp"
+#include "synthetic_scene.hpp"
+
+using namespace twistslam;
+using namespace twistslam::features;
+
+namespace {
+
+// SAD window of the scan tests: the defaults of StereoSearchOptions (15 x 5 level px).
+constexpr int kHalfWidth = 7, kHalfHeight = 2;
+
+// A left image of random texture and a right image that sees it `disparity` px to the left
+// (R(x) = L(x + disparity), rectified), each with its own Gaussian noise of `noise` grey levels.
+struct ShiftedPair {
+  cv::Mat left, right;
+};
+
+ShiftedPair shifted_pair(const cv::Mat& texture_f32, int disparity, double noise, std::uint64_t seed) {
+  const int width = texture_f32.cols - disparity;
+  cv::Mat left = texture_f32.colRange(0, width).clone();
+  cv::Mat right = texture_f32.colRange(disparity, disparity + width).clone();
+  cv::RNG rng(seed);
+  for (cv::Mat* m : {&left, &right}) {
+    cv::Mat n(m->size(), CV_32F);
+    rng.fill(n, cv::RNG::NORMAL, 0.0, noise);
+    *m += n;
+  }
+  return {test::to_u8(left), test::to_u8(right)};
+}
+
+TEST(ScanSad, RandomTextureGivesTheExactShiftAndADistinctMinimum) {
+  const cv::Mat texture = test::random_texture(260, 40, 7);
+  for (int disparity : {3, 17, 42}) {
+    const ShiftedPair p = shifted_pair(texture, disparity, 1.0, 50 + disparity);
+    for (int xl : {80, 120, 160}) {
+      const SadScan scan = scan_sad(p.left, p.right, xl, 20, xl - 70, xl, kHalfWidth, kHalfHeight);
+      ASSERT_EQ(scan.best_column, xl - disparity) << "disparity " << disparity << ", xl " << xl;
+      // noise of 1 grey level against a texture of std ~40: the true minimum is far below
+      // any other (a ratio near 1 would fail the search's uniqueness test of 0.7)
+      EXPECT_LT(scan.best_cost, 0.2f);
+      EXPECT_TRUE(std::isfinite(scan.second_cost));
+      EXPECT_LT(scan.best_cost, 0.4f * scan.second_cost);
+    }
+  }
+}
+
+TEST(ScanSad, PeriodicTextureHasNoUniqueMinimum) {
+  // Columns repeat every 8 px (a random 8 px wide tile repeated), rows vary: every
+  // 8-px multiple of the shift fits as well as the true one.
+  constexpr int kPeriodPx = 8;
+  const cv::Mat tile = test::random_texture(kPeriodPx, 40, 9);
+  cv::Mat texture;
+  cv::repeat(tile, 1, 32, texture);
+  const ShiftedPair p = shifted_pair(texture, 13, 1.0, 60);
+  const SadScan scan = scan_sad(p.left, p.right, 120, 20, 60, 120, kHalfWidth, kHalfHeight);
+  ASSERT_GE(scan.best_column, 0);
+  EXPECT_EQ((120 - scan.best_column) % kPeriodPx, 13 % kPeriodPx);  // one of the aliases
+  ASSERT_TRUE(std::isfinite(scan.second_cost));
+  EXPECT_GT(scan.best_cost / scan.second_cost, 0.8f);
+  // the control: the same scan on random texture is clearly unique
+  const ShiftedPair q = shifted_pair(test::random_texture(256, 40, 10), 13, 1.0, 61);
+  const SadScan unique = scan_sad(q.left, q.right, 120, 20, 60, 120, kHalfWidth, kHalfHeight);
+  EXPECT_LT(unique.best_cost / unique.second_cost, 0.5f);
+}
+
+TEST(ScanSad, WindowsLeavingTheImageGiveNoColumn) {
+  const ShiftedPair p = shifted_pair(test::random_texture(220, 40, 11), 10, 1.0, 62);
+  const int W = p.left.cols, H = p.left.rows;
+  // the left window leaves the image
+  EXPECT_EQ(scan_sad(p.left, p.right, 100, 1, 50, 100, kHalfWidth, kHalfHeight).best_column, -1);
+  EXPECT_EQ(scan_sad(p.left, p.right, 100, H - 2, 50, 100, kHalfWidth, kHalfHeight).best_column, -1);
+  EXPECT_EQ(scan_sad(p.left, p.right, 3, 20, 0, 3, kHalfWidth, kHalfHeight).best_column, -1);
+  EXPECT_EQ(scan_sad(p.left, p.right, W - 4, 20, 50, W - 4, kHalfWidth, kHalfHeight).best_column, -1);
+  // every right window leaves the image
+  EXPECT_EQ(scan_sad(p.left, p.right, 100, 20, -40, 2, kHalfWidth, kHalfHeight).best_column, -1);
+  EXPECT_EQ(scan_sad(p.left, p.right, 100, 20, W, W + 30, kHalfWidth, kHalfHeight).best_column, -1);
+  // a right image with fewer rows than the left window needs
+  EXPECT_EQ(scan_sad(p.left, p.right.rowRange(0, 21), 100, 20, 50, 100, kHalfWidth, kHalfHeight)
+                .best_column, -1);
+  // a range reaching past the left edge is clipped, not refused: the true column is found
+  const SadScan clipped = scan_sad(p.left, p.right, 30, 20, -60, 30, kHalfWidth, kHalfHeight);
+  EXPECT_EQ(clipped.best_column, 20);
+  // three columns around the minimum: nothing >= 2 columns away competes
+  const SadScan narrow = scan_sad(p.left, p.right, 100, 20, 89, 91, kHalfWidth, kHalfHeight);
+  EXPECT_EQ(narrow.best_column, 90);
+  EXPECT_TRUE(std::isinf(narrow.second_cost));
+}
+
+// Planes at 8, 20 and 45 m and a uniform (untextured) one at 20 m, rendered for KITTI 0000;
+// the right image's principal point sits kOffsetPx right of the calibration's, which the
+// camera's disparity_offset declares.
+constexpr double kOffsetPx = 0.6;  // px, what real KITTI colour pairs lack (docs/camera_scale.md)
+constexpr int kUniformPlane = 3;
+
+struct SearchScene {
+  geometry::StereoCamera cam = test::kitti_camera();
+  std::vector<test::Plane> planes;
+  cv::Mat left, right, ids_left, ids_right;
+  Keypoints keypoints;
+  std::vector<cv::Mat> pyramid_left, pyramid_right;
+
+  SearchScene() {
+    planes = {test::make_plane(45.0, -40, -12, 40, 12, 1.3, cam.fx, 21),
+              test::make_plane(20.0, -9.0, -2.0, -1.0, 2.0, 1.3, cam.fx, 22),
+              test::make_plane(8.0, 0.5, -1.5, 4.0, 1.2, 1.3, cam.fx, 23),
+              test::make_plane(20.0, 8.0, -1.5, 14.0, 1.5, 1.3, cam.fx, 24)};
+    planes[kUniformPlane].texture.setTo(128.0);
+    cam.disparity_offset = kOffsetPx;
+    geometry::StereoCamera shifted = cam;
+    shifted.cx += kOffsetPx;
+    left = test::render(planes, cam, false, &ids_left, 1.0, 400);
+    right = test::render(planes, shifted, true, &ids_right, 1.0, 401);
+    keypoints = OrbExtractor(OrbOptions{}).extract(left);
+    pyramid_left = keypoints.pyramid;
+    pyramid_right = build_pyramid(right, keypoints.scale_factor, static_cast<int>(pyramid_left.size()));
+  }
+
+  // True depth along the left axis and image disparity (u_left - u_right of the rendered
+  // pair) at a left pixel; plane -1 where the SAD window is not on one plane in both images.
+  struct Truth {
+    int plane = -1;
+    double depth = 0, disparity = 0;
+  };
+  Truth truth(const cv::KeyPoint& k) const {
+    Truth t;
+    const test::Hit h = test::cast_ray(planes, cam, cam.t_left, k.pt.x, k.pt.y);
+    if (h.plane < 0) return t;
+    const double ur = cam.project_right(h.X_c).x() + kOffsetPx;
+    // the 15 x 5 window at the keypoint's level with a margin of 2 level px
+    const double r = 10.0 * std::pow(1.2, k.octave);
+    if (!test::box_on_plane(ids_left, k.pt.x, k.pt.y, r, h.plane) ||
+        !test::box_on_plane(ids_right, ur, k.pt.y, r, h.plane))
+      return t;
+    t.plane = h.plane;
+    t.depth = (h.X_c + cam.t_left).z();
+    t.disparity = k.pt.x - ur;
+    return t;
+  }
+};
+
+const SearchScene& search_scene() {
+  static const SearchScene s;
+  return s;
+}
+
+StereoMatches unmatched(size_t n) {
+  return {std::vector<float>(n, -1.0f), std::vector<float>(n, -1.0f)};
+}
+
+TEST(SearchStereo, RecoversKnownDepthsAtOctavesZeroAndOne) {
+  const SearchScene& s = search_scene();
+  std::vector<int> which;
+  for (int i = 0; i < static_cast<int>(s.keypoints.size()); ++i)
+    if (s.keypoints.keypoints[i].octave <= 1 && s.truth(s.keypoints.keypoints[i]).plane >= 0 &&
+        s.truth(s.keypoints.keypoints[i]).plane != kUniformPlane)
+      which.push_back(i);
+  StereoMatches m = unmatched(s.keypoints.size());
+  const int found = search_stereo(s.keypoints, s.pyramid_left, s.pyramid_right, s.cam,
+                                  StereoSearchOptions{}, which, &m);
+  EXPECT_EQ(found, static_cast<int>(m.num_matched()));
+  // per plane (8, 20, 45 m) and octave: accepted, and accurate within 1 % or 0.15 px
+  int per_plane_octave[3][2] = {}, accepted_per_plane[3][2] = {};
+  int accurate = 0, far_off = 0;
+  for (int i : which) {
+    const cv::KeyPoint& k = s.keypoints.keypoints[i];
+    const SearchScene::Truth t = s.truth(k);
+    const int p = t.plane == 0 ? 2 : t.plane == 1 ? 1 : 0;  // 0: 8 m, 1: 20 m, 2: 45 m
+    ++per_plane_octave[p][k.octave];
+    if (!(m.depth[i] > 0)) continue;
+    ++accepted_per_plane[p][k.octave];
+    // depth follows from the right column and the camera's offset
+    EXPECT_NEAR(m.depth[i], s.cam.fx * s.cam.baseline / (k.pt.x - m.u_right[i] + kOffsetPx),
+                1e-4 * m.depth[i]);
+    const double disparity_error = std::abs(k.pt.x - m.u_right[i] - t.disparity);
+    const double depth_error = std::abs(m.depth[i] - t.depth) / t.depth;
+    if (depth_error < 0.01 || disparity_error < 0.15) ++accurate;
+    if (disparity_error > 1.0) ++far_off;
+  }
+  std::cout << "[ search ] keypoints " << which.size() << ", found " << found << ", accurate "
+            << accurate << ", > 1 px off " << far_off << "; per plane 8/20/45 m, octave 0|1:";
+  for (int p = 0; p < 3; ++p)
+    std::cout << " " << accepted_per_plane[p][0] << "/" << per_plane_octave[p][0] << "|"
+              << accepted_per_plane[p][1] << "/" << per_plane_octave[p][1];
+  std::cout << "\n";
+  ASSERT_GT(found, 300);
+  for (int p = 0; p < 3; ++p)
+    for (int o = 0; o < 2; ++o) {
+      ASSERT_GT(per_plane_octave[p][o], 10) << "plane " << p << " octave " << o;
+      EXPECT_GT(accepted_per_plane[p][o], 0.6 * per_plane_octave[p][o]) << "plane " << p << " octave " << o;
+    }
+  EXPECT_GE(accurate, 0.97 * found);
+  EXPECT_LE(far_off, 0.01 * found);
+}
+
+TEST(SearchStereo, IgnoringTheDisparityOffsetBiasesFarDepths) {
+  // the control of the offset: the same pair searched with a camera that trusts the
+  // calibration puts the 45 m plane ~0.6 / 8.7 ~ 7 % too deep
+  const SearchScene& s = search_scene();
+  geometry::StereoCamera trusting = s.cam;
+  trusting.disparity_offset = 0;
+  std::vector<int> which;
+  for (int i = 0; i < static_cast<int>(s.keypoints.size()); ++i)
+    if (s.keypoints.keypoints[i].octave == 0 && s.truth(s.keypoints.keypoints[i]).plane == 0)
+      which.push_back(i);
+  std::vector<double> with, without;
+  for (const geometry::StereoCamera* cam : {&s.cam, static_cast<const geometry::StereoCamera*>(&trusting)}) {
+    StereoMatches m = unmatched(s.keypoints.size());
+    search_stereo(s.keypoints, s.pyramid_left, s.pyramid_right, *cam, StereoSearchOptions{}, which, &m);
+    for (int i : which)
+      if (m.depth[i] > 0) (cam == &s.cam ? with : without).push_back(m.depth[i] / 45.0);
+  }
+  ASSERT_GT(with.size(), 30u);
+  ASSERT_GT(without.size(), 30u);
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  EXPECT_NEAR(median(with), 1.0, 0.005);
+  EXPECT_GT(median(without), 1.05);
+}
+
+TEST(SearchStereo, UniformRegionGetsNoDepthAndOnlyWhichIsTouched) {
+  const SearchScene& s = search_scene();
+  // keypoints placed by hand on the untextured plane (ORB finds none there), and a few
+  // textured ORB keypoints, of which only some are searched
+  Keypoints kp;
+  for (float u = 1000; u <= 1080; u += 20)
+    for (float v = 140; v <= 200; v += 20) {
+      ASSERT_EQ(s.ids_left.at<int>(static_cast<int>(v), static_cast<int>(u)), kUniformPlane);
+      kp.keypoints.emplace_back(cv::Point2f(u, v), 31.0f, 0.0f, 0.0f, 0);
+    }
+  const int num_uniform = static_cast<int>(kp.size());
+  for (const cv::KeyPoint& k : s.keypoints.keypoints)
+    if (k.octave == 0 && s.truth(k).plane == 2 && kp.size() < static_cast<size_t>(num_uniform) + 40)
+      kp.keypoints.push_back(k);
+  ASSERT_EQ(kp.size(), static_cast<size_t>(num_uniform) + 40);
+  std::vector<int> which;
+  for (int i = 0; i < static_cast<int>(kp.size()); ++i)
+    if (i < num_uniform || i % 2 == 0) which.push_back(i);
+  constexpr float kSentinel = -7.0f;  // what the caller had: kept where nothing is found
+  StereoMatches m{std::vector<float>(kp.size(), kSentinel), std::vector<float>(kp.size(), kSentinel)};
+  const int found = search_stereo(kp, s.pyramid_left, s.pyramid_right, s.cam, StereoSearchOptions{}, which, &m);
+  for (int i = 0; i < num_uniform; ++i) {
+    EXPECT_EQ(m.depth[i], kSentinel) << "uniform keypoint " << i;
+    EXPECT_EQ(m.u_right[i], kSentinel) << "uniform keypoint " << i;
+  }
+  int searched_found = 0;
+  for (int i = num_uniform; i < static_cast<int>(kp.size()); ++i) {
+    if (i % 2) {
+      EXPECT_EQ(m.depth[i], kSentinel) << "keypoint " << i << " is not in which";
+      EXPECT_EQ(m.u_right[i], kSentinel);
+    } else if (m.depth[i] != kSentinel) {
+      ++searched_found;
+      EXPECT_NEAR(m.depth[i], 8.0, 0.08);
+    }
+  }
+  EXPECT_EQ(found, searched_found);
+  EXPECT_GT(searched_found, 15);  // of the 20 textured keypoints searched
+}
+
+TEST(SearchStereo, BadInputThrows) {
+  const SearchScene& s = search_scene();
+  const Keypoints& kp = s.keypoints;
+  const StereoSearchOptions ok;
+  const StereoMatches m0 = unmatched(kp.size());
+  auto run = [&](const Keypoints& k, const std::vector<cv::Mat>& pl, const std::vector<cv::Mat>& pr,
+                 const geometry::StereoCamera& cam, const StereoSearchOptions& o,
+                 const std::vector<int>& which, StereoMatches m) {
+    return search_stereo(k, pl, pr, cam, o, which, &m);
+  };
+  const int n = static_cast<int>(kp.size());
+  EXPECT_NO_THROW(run(kp, s.pyramid_left, s.pyramid_right, s.cam, ok, {0, n - 1}, m0));
+  EXPECT_THROW(run(kp, s.pyramid_left, s.pyramid_right, s.cam, ok, {n}, m0), std::invalid_argument);
+  EXPECT_THROW(run(kp, s.pyramid_left, s.pyramid_right, s.cam, ok, {-1}, m0), std::invalid_argument);
+  // a keypoint of octave 1 against pyramids of one level
+  int octave1 = -1;
+  for (int i = 0; i < n && octave1 < 0; ++i)
+    if (kp.keypoints[i].octave == 1) octave1 = i;
+  ASSERT_GE(octave1, 0);
+  const std::vector<cv::Mat> one_left(s.pyramid_left.begin(), s.pyramid_left.begin() + 1);
+  const std::vector<cv::Mat> one_right(s.pyramid_right.begin(), s.pyramid_right.begin() + 1);
+  EXPECT_THROW(run(kp, one_left, s.pyramid_right, s.cam, ok, {octave1}, m0), std::invalid_argument);
+  EXPECT_THROW(run(kp, s.pyramid_left, one_right, s.cam, ok, {octave1}, m0), std::invalid_argument);
+  EXPECT_THROW(run(kp, s.pyramid_left, {}, s.cam, ok, {0}, m0), std::invalid_argument);
+  const std::vector<cv::Mat> cropped = {s.pyramid_right[0](cv::Rect(0, 0, 600, 300))};
+  EXPECT_THROW(run(kp, one_left, cropped, s.cam, ok, {0}, m0), std::invalid_argument);
+  // matches of the wrong size
+  StereoMatches short_depth = m0;
+  short_depth.depth.pop_back();
+  EXPECT_THROW(run(kp, s.pyramid_left, s.pyramid_right, s.cam, ok, {0}, short_depth), std::invalid_argument);
+  EXPECT_THROW(run(kp, s.pyramid_left, s.pyramid_right, s.cam, ok, {0}, unmatched(n + 1)),
+               std::invalid_argument);
+  // a camera without baseline or focal length
+  geometry::StereoCamera no_baseline = s.cam;
+  no_baseline.baseline = 0;
+  EXPECT_THROW(run(kp, s.pyramid_left, s.pyramid_right, no_baseline, ok, {0}, m0), std::invalid_argument);
+  geometry::StereoCamera no_focal = s.cam;
+  no_focal.fx = 0;
+  EXPECT_THROW(run(kp, s.pyramid_left, s.pyramid_right, no_focal, ok, {0}, m0), std::invalid_argument);
+  // each bad option, also with nothing to search
+  std::vector<StereoSearchOptions> bad(9, ok);
+  bad[0].min_depth = 0;
+  bad[1].max_depth = bad[1].min_depth;
+  bad[2].max_depth = 2e4f;
+  bad[3].max_cost = 0;
+  bad[4].uniqueness = 0;
+  bad[5].uniqueness = 1.5f;
+  bad[6].patch_radius = 0;
+  bad[7].patch_radius = kMaxSadHalfWidth + 1;
+  bad[8].patch_half_height = -1;
+  for (size_t b = 0; b < bad.size(); ++b) {
+    EXPECT_THROW(check_options(bad[b]), std::invalid_argument) << "option set " << b;
+    EXPECT_THROW(run(kp, s.pyramid_left, s.pyramid_right, s.cam, bad[b], {}, m0), std::invalid_argument)
+        << "option set " << b;
+  }
+  bad[0] = ok;
+  bad[0].max_depth = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(check_options(bad[0]), std::invalid_argument);
+}
+
+}  // namespace
