@@ -164,6 +164,24 @@ dict
 state, link, frames, T_w_o (K, 4, 4) in the world frame, twist (K, 6), detected = a valid twist
 was estimated that frame, ...) and ``points_o`` (M, 3) its points in the object frame,
 ``point_found`` (M,) the frames each was matched in.)doc")
+      .def("road_plane",
+           [](const t::System& s) {
+             const auto& r = s.road_plane();
+             const Vec4 plane = r.plane();
+             DoubleArray out = new_array({4});
+             for (int k = 0; k < 4; ++k) out.mutable_data()[k] = plane[k];
+             return py::dict("valid"_a = r.valid(), "plane"_a = out, "num_points"_a = r.num_points(),
+                             "num_fits"_a = r.num_fits(), "last_inliers"_a = r.last_inliers());
+           },
+           R"doc(The road plane that gives the planar link's normal, fitted (RANSAC + SVD) to the
+stereo keypoints labelled ``visual_objects.road_class_id`` of every keyframe.
+
+Returns
+-------
+dict
+    valid : bool, a fit was accepted (otherwise ``plane`` is the prior: the first camera's up,
+    1.65 m below it); plane : (4,) float64 (n, d), n . X_w + d = 0 on the road, n pointing up;
+    num_points : int, road points in the reservoir; num_fits, last_inliers : int.)doc")
       .def("trajectory",
            [](const t::System& s) {
              const auto traj = s.trajectory();

@@ -118,7 +118,8 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
   std::vector<int> which;
   for (int i = 0; i < static_cast<int>(left.size()); ++i) {
     if (f->matches.depth[i] > 0) continue;
-    const cv::Point& p = cv::Point(cvRound(left.keypoints[i].pt.x), cvRound(left.keypoints[i].pt.y));
+    // std::lround as FrameBuilder and ObjectTracker read a keypoint's pixel (cvRound rounds half to even)
+    const cv::Point p(static_cast<int>(std::lround(left.keypoints[i].pt.x)), static_cast<int>(std::lround(left.keypoints[i].pt.y)));
     if (p.x < 0 || p.y < 0 || p.x >= object_mask.cols || p.y >= object_mask.rows) continue;
     if (object_mask.at<std::uint8_t>(p.y, p.x)) which.push_back(i);
   }

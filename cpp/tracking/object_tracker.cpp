@@ -495,6 +495,9 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   instance_class_.clear();
   for (const auto& [instance, v] : votes) instance_class_[instance] = v.best();
 
+  // the road plane is re-estimated as the map grows: the planar links follow its normal
+  for (objects::ObjectTrack& t : tracks_)
+    if (t.alive() && t.link == geometry::LinkType::kPlanar) t.Pi = geometry::projector_planar(up_w);
   // 1. search every live cluster from its prediction
   std::vector<int> live;
   std::vector<Mat4> predicted;

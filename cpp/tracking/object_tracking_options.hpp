@@ -16,6 +16,7 @@ struct ObjectTrackingOptions {
   // classes moving on the road: planar link (3 DoF); the other object classes are free
   std::vector<int> planar_class_ids{26, 27, 28, 29, 30, 31, 32, 33};
   int road_class_id = 7;            // the road cluster gives the planar link's normal
+  double road_max_depth_m = 25;     // road keypoints farther than this do not join the plane fit
   double flow_radius_px = 4;        // search window around the flow-predicted position
   double projection_radius_px = 12; // ... around the motion-model projection (no flow)
   double refine_radius_px = 3;      // ... of the second pass, around the estimated pose
@@ -57,6 +58,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("object_class_ids", o.object_class_ids, 0, 65535);  // 16-bit panoptic class ids
   visit("planar_class_ids", o.planar_class_ids, 0, 65535);
   visit("road_class_id", o.road_class_id, -1, 65535);  // -1: no road cluster
+  visit("road_max_depth_m", o.road_max_depth_m, 0.5, 10000.0);
   visit("flow_radius_px", o.flow_radius_px, 0.0, 2000.0);  // px: 2000 spans any image
   visit("projection_radius_px", o.projection_radius_px, 0.0, 2000.0);
   visit("refine_radius_px", o.refine_radius_px, 0.0, 2000.0);

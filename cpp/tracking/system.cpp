@@ -37,6 +37,7 @@ const char* to_string(Status status) {
 
 System::System(const geometry::StereoCamera& camera, const SlamOptions& options)
     : options_((check_options(options), options)),  // the same ranges as from Python
+      camera_(camera),
       frame_builder_(camera, options),
       camera_tracker_(camera, options.tracking, frame_builder_.extractor().scale_factors(),
                       LevelWeights(frame_builder_.extractor().level_sigma2())),
@@ -46,6 +47,8 @@ System::System(const geometry::StereoCamera& camera, const SlamOptions& options)
 
 void System::reset() {
   map_.clear();
+  road_plane_ = objects::RoadPlaneEstimator();
+  road_up_w_ = Vec3(0, -1, 0);
   camera_tracker_.reset();
   local_mapper_.reset();
   object_tracker_.reset();
@@ -122,6 +125,10 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
     state_ = State::kLost;  // keep the velocity: the next prediction continues the motion
   }
 
+  if (tracked && result.is_keyframe && !labels.empty() && options_.visual_objects.road_class_id >= 0) {
+    add_road_points(frame);
+    timer.lap("road_plane");
+  }
   // 4. Objects: every cluster tracked against the camera pose just found (eq. 4).
   if (tracked && (!instances.empty() || !object_tracker_.tracks().empty())) {
     result.objects = object_tracker_.track(frame, instances, flow, road_up_w_);
@@ -137,6 +144,22 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
     frame.T_c_w = map_.keyframe(reference_keyframe_).T_c_w;
   camera_tracker_.set_last_frame(std::move(frame));
   return result;
+}
+
+void System::add_road_points(const Frame& frame) {
+  const map::StereoKeypoints& k = frame.keypoints;
+  const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
+  const ObjectTrackingOptions& vo = options_.visual_objects;
+  std::vector<Vec3> points;
+  for (size_t i = 0; i < k.size(); ++i) {
+    if (k.label[i] != vo.road_class_id || !k.has_depth(i) || k.depth[i] > vo.road_max_depth_m) continue;
+    points.push_back(T_w_c.topLeftCorner<3, 3>() * camera_.backproject(k.uv[i], k.depth[i]) + T_w_c.topRightCorner<3, 1>());
+  }
+  if (points.empty()) return;
+  Points3 rows(static_cast<Eigen::Index>(points.size()), 3);
+  for (size_t r = 0; r < points.size(); ++r) rows.row(static_cast<Eigen::Index>(r)) = points[r].transpose();
+  road_plane_.add_points(rows);
+  if (road_plane_.valid()) road_up_w_ = road_plane_.normal_up();
 }
 
 void System::record_trajectory(const Frame& frame, Status status) {

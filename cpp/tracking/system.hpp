@@ -12,6 +12,7 @@
 
 #include "geometry/stereo_camera.hpp"
 #include "map/map.hpp"
+#include "objects/road_plane.hpp"
 #include "tracking/camera_tracker.hpp"
 #include "tracking/frame_builder.hpp"
 #include "tracking/local_mapper.hpp"
@@ -63,6 +64,7 @@ class System {
   std::vector<std::pair<TrajectoryEntry, Mat4>> trajectory() const;
   const map::Map& map() const { return map_; }
   const ObjectTracker& objects() const { return object_tracker_; }
+  const objects::RoadPlaneEstimator& road_plane() const { return road_plane_; }
   const SlamOptions& options() const { return options_; }
   void reset();
 
@@ -71,6 +73,7 @@ class System {
   void record_trajectory(const Frame& frame, Status status);
 
   SlamOptions options_;
+  geometry::StereoCamera camera_;
   FrameBuilder frame_builder_;
   CameraTracker camera_tracker_;
   LocalMapper local_mapper_;
@@ -82,7 +85,11 @@ class System {
   // trajectory stores poses relative to it, and it is the keyframe decision's reference.
   int reference_keyframe_ = -1;
   std::vector<TrajectoryEntry> trajectory_;
-  // the road's normal in the world frame (planar link): "up" of the first camera (y down)
+  // Road points of each keyframe (stereo keypoints labelled road_class_id) -> the road plane,
+  // whose normal is the planar link's (TwistSLAM: the road cluster's plane). Until a fit is
+  // accepted it is "up" of the first camera (y down).
+  void add_road_points(const Frame& frame);
+  objects::RoadPlaneEstimator road_plane_;
   Vec3 road_up_w_ = Vec3(0, -1, 0);
 };
 

@@ -259,6 +259,14 @@ class Slam:
             return []
         return list(self._system.objects())
 
+    def road_plane(self) -> dict | None:
+        """The road plane of the planar link (``valid``, ``plane`` (4,) = (n, d) with
+        n . X_w + d = 0, ``num_points``, ``num_fits``, ``last_inliers``); None before the first
+        frame."""
+        if self._system is None:
+            return None
+        return dict(self._system.road_plane())
+
     def reset(self) -> None:
         """Forget the map and the trajectory; the next frame initialises a new map."""
         if self._system is not None:

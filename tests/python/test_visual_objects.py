@@ -101,3 +101,24 @@ def test_run_writes_a_rerun_recording_with_the_objects(sim, tmp_path):
     for entity in ("/world/camera", "/world/camera/image", "/world/camera/image/segmentation",
                    "/world/objects/boxes", "/world/objects/points", "/world/camera_trajectory"):
         assert entities.get(entity, 0) > 0, f"{entity} missing from {sorted(entities)}"
+
+
+def test_road_plane_is_fitted_from_the_road_keypoints(sim):
+    """The planar link's normal comes from the road cluster: keyframe keypoints labelled road
+    (the simulator's panoptic files) give a plane that matches the simulated flat road, one
+    camera height (1.65 m) below the first camera, with "up" = -y."""
+    from twistslam.perception.panoptic_files import read_sim_panoptic
+
+    sequence = KittiTracking(sim, "0000")
+    slam = twistslam.Slam(twistslam.Config(), sequence.calib)
+    assert slam.road_plane() is None
+    for i in range(8):
+        frame = sequence[i]
+        labels = read_sim_panoptic(sim / "training" / "panoptic" / "0000" / f"{i:06d}.png")
+        slam.track(frame, labels.class_id)
+    road = slam.road_plane()
+    assert road["valid"] and road["num_fits"] >= 1 and road["num_points"] >= 50
+    n, d = road["plane"][:3], road["plane"][3]
+    # the camera world is the first camera frame: the road is y = +1.65 (y down)
+    assert np.degrees(np.arccos(np.clip(n @ np.array([0.0, -1.0, 0.0]), -1, 1))) < 1.0
+    assert abs(d - 1.65) < 0.05
