@@ -334,11 +334,15 @@ bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o)
   if (static_cast<int>(kept.size()) < options_.min_new_cluster_points) return false;
   centroid /= static_cast<double>(kept.size());
   objects::ObjectCluster& cluster = clusters_[c];
-  // a cluster without a velocity yet (it failed in its second frame) has no prediction worth
-  // keeping: its origin moves to the new points' centroid, as a new cluster's would
-  if (cluster.velocity.isZero()) T_w_o->topRightCorner<3, 1>() = centroid;
+  // A cluster without a velocity yet (it failed in its second frame) has no prediction worth
+  // keeping: its origin moves to the new points' centroid, as a new cluster's would, and its
+  // one-frame-old points go. An older cluster keeps its points at the predicted pose: they
+  // hold its extent (the box until detections give sizes), and the unmatched ones are culled.
+  if (cluster.velocity.isZero()) {
+    T_w_o->topRightCorner<3, 1>() = centroid;
+    cluster.points.clear();
+  }
   const Mat4 T_o_w = geometry::se3_inverse(*T_w_o);
-  cluster.points.clear();
   for (const auto& [k, X_w] : kept) {
     if (static_cast<int>(cluster.points.size()) >= options_.max_points) break;
     objects::ObjectPoint p;

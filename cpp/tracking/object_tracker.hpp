@@ -81,9 +81,9 @@ class ObjectTracker {
   // Stereo keypoints of `instance` no cluster claimed, in the world frame.
   std::vector<std::pair<int, Vec3>> free_instance_points(const Frame& frame, int instance) const;
   bool start_cluster(const Frame& frame, int instance, int class_id, const Vec3& up_w);
-  // The cluster's points replaced by the free stereo points of `instance`, placed with
-  // *T_w_o (the prediction; a cluster without velocity moves to their centroid). False when
-  // the instance has too few points.
+  // The free stereo points of `instance` join the cluster, placed with *T_w_o (the
+  // prediction; a cluster without velocity moves to their centroid and drops its old points).
+  // False when the instance has too few points.
   bool reseed(int c, const Frame& frame, int instance, Mat4* T_w_o);
   void cull(objects::ObjectCluster& cluster) const;
   // e_dyna + e_const over the cluster's last window_frames frames (eq. 9), camera fixed.
