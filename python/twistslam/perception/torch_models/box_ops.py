@@ -52,7 +52,7 @@ class BoxCoder:
     def decode(self, codes: torch.Tensor, references: torch.Tensor) -> torch.Tensor:
         """Boxes from ``codes`` (N, 4 K) relative to ``references`` (N, 4): (N, K, 4), one box
         per group of four codes (the box head predicts one box per class)."""
-        codes = codes.reshape(codes.shape[0], -1, 4).to(references.dtype)
+        codes = codes.reshape(codes.shape[0], codes.shape[1] // 4, 4).to(references.dtype)
         wx, wy, ww, wh = self.weights
         ref_w = (references[:, 2] - references[:, 0])[:, None]
         ref_h = (references[:, 3] - references[:, 1])[:, None]
