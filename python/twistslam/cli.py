@@ -131,7 +131,7 @@ def _run_run(args: argparse.Namespace) -> int:
 
     result = run(sequence, config, progress=not args.no_progress,
                  segmentation=args.segmentation, flow=args.flow, viz=args.viz,
-                 viz_save=args.viz_save)
+                 viz_save=args.viz_save, segmentation_weights=_segmentation_weights(args))
     paths = result.save(args.out)
     t = result.timings.summary()
     print(f"{result.seq or args.root}: {len(result)} frames, {t['hz']:.1f} Hz "
@@ -139,6 +139,15 @@ def _run_run(args: argparse.Namespace) -> int:
           f"{int(result.is_keyframe.sum())} keyframes")
     print(f"wrote {', '.join(p.name for p in paths.values())} in {args.out}")
     return 0
+
+
+def _segmentation_weights(args: argparse.Namespace) -> dict | None:
+    """``--maskrcnn-weights`` / ``--semantic-weights`` as run()'s segmentation_weights."""
+    files = {"maskrcnn": args.maskrcnn_weights, "semantic": args.semantic_weights}
+    files = {k: v for k, v in files.items() if v is not None}
+    if files and args.segmentation != "torch":
+        raise ValueError("--maskrcnn-weights / --semantic-weights need --segmentation torch")
+    return files or None
 
 
 def _run_objects(args: argparse.Namespace, config, sequence) -> int:
@@ -185,10 +194,19 @@ def _add_run(sub: argparse._SubParsersAction) -> None:
                    "writes OUT/tracking/SEQ.txt (objects tracked from the detections alone)")
     p.add_argument("--no-images", action="store_true",
                    help="do not run the stereo SLAM (objects from --detections only)")
-    p.add_argument("--segmentation", default="auto", choices=["auto", "files", "boxes", "none"],
+    p.add_argument("--segmentation", default="auto",
+                   choices=["auto", "files", "boxes", "torch", "none"],
                    help="panoptic segmentation source: files (the sequence's panoptic PNGs), "
-                   "boxes (masks from 3D detections), none; auto: files when the sequence "
+                   "boxes (masks from 3D detections), torch (Mask R-CNN + semantic network, "
+                   "needs --maskrcnn-weights), none; auto: files when the sequence "
                    "has them, else boxes (default: auto)")
+    p.add_argument("--maskrcnn-weights", metavar="FILE", type=Path, default=None,
+                   help="--segmentation torch: state dict of a torchvision-layout "
+                   "maskrcnn_resnet50_fpn (COCO classes); nothing is downloaded")
+    p.add_argument("--semantic-weights", metavar="FILE", type=Path, default=None,
+                   help="--segmentation torch: state dict of a torchvision-layout "
+                   "deeplabv3_resnet50 or fcn_resnet50 (VOC classes) for the stuff; "
+                   "optional (without it, pixels outside the things are unknown)")
     p.add_argument("--flow", default="auto", choices=["auto", "files", "dis", "raft", "none"],
                    help="optical flow source: files (the sequence's flow files), dis (OpenCV "
                    "DIS), raft (torchvision RAFT, needs weights), none; auto: files when the "

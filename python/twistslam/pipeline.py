@@ -114,7 +114,8 @@ def frame_range(config: Config, length: int) -> range:
 
 def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = None,
         progress: bool = True, *, segmentation: Any = "auto", flow: Any = "auto",
-        detections: Any = None, flow_weights: str | Path | None = None, viz: bool = False,
+        detections: Any = None, flow_weights: str | Path | None = None,
+        segmentation_weights: dict | None = None, viz: bool = False,
         viz_save: str | Path | None = None) -> Result:
     """Track the camera and every object cluster through a stereo sequence.
 
@@ -130,8 +131,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     segmentation
         Panoptic source for the object clusters and the static / dynamic split (eq. 3):
         ``"auto"`` (the sequence's panoptic files, else masks from its detections and scans,
-        else none), ``"files"``, ``"boxes"``, ``"none"``, or a callable ``frame -> Panoptic``
-        (:mod:`twistslam.perception.run_stages`).
+        else none), ``"files"``, ``"boxes"``, ``"torch"`` (with ``segmentation_weights``),
+        ``"none"``, or a callable ``frame -> Panoptic`` (:mod:`twistslam.perception.run_stages`).
     flow
         Optical flow source for the object search: ``"auto"`` (files, else DIS), ``"files"``,
         ``"dis"``, ``"raft"`` (with ``flow_weights``), ``"none"``, or a callable.
@@ -140,6 +141,10 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         the sequence's ``detections/<name>/SEQ.txt``.
     flow_weights
         RAFT state-dict file for ``flow="raft"``.
+    segmentation_weights
+        Files of ``segmentation="torch"``: ``{"maskrcnn": FILE, "semantic": FILE}``
+        (torchvision-layout state dicts; semantic optional), optionally ``"semantic_classes"``
+        (:class:`twistslam.perception.TorchPanoptic`).
     viz, viz_save
         Log the run to a rerun viewer (``pip install twistslam[viz]``) / to an ``.rrd`` file.
 
@@ -165,7 +170,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     if isinstance(segmentation, str) and segmentation == "auto" and not config.run.use_labels:
         segmentation = "none"
     perception = perception_stages(sequence, segmentation, flow, detections=detections,
-                                   flow_weights=flow_weights)
+                                   flow_weights=flow_weights,
+                                   segmentation_weights=segmentation_weights)
     if (perception.segmentation is not None and config.visual_objects.enabled
             and not config.tracking.dynamic_class_ids):
         # eq. 3: object classes track their clusters, never the camera

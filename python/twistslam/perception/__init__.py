@@ -9,10 +9,11 @@ from .panoptic import CITYSCAPES_CLASSES, DEFAULT_DYNAMIC_CLASSES, Panoptic
 from .panoptic_files import CocoPanopticFiles, SimPanopticFiles, read_coco_panoptic, read_sim_panoptic
 from .panoptic_from_boxes import BoxMaskConfig, PanopticFromBoxes
 from .panoptic_source import PanopticStage, check_panoptic, panoptic_source
+from .panoptic_torch import TorchPanoptic
 from .stage import FlowStage, TimedStage, check_flow
 
 __all__ = ["DisFlow", "DisOptions", "FileFlow", "FlowStage", "RaftFlow", "TimedStage", "check_flow",
            "flow_source", "load_raft", "read_flo", "read_kitti_flow", "write_flo", "write_kitti_flow",
            "BoxMaskConfig", "CITYSCAPES_CLASSES", "CocoPanopticFiles", "DEFAULT_DYNAMIC_CLASSES",
            "Panoptic", "PanopticFromBoxes", "PanopticStage", "SimPanopticFiles", "check_panoptic",
-           "panoptic_source", "read_coco_panoptic", "read_sim_panoptic"]
+           "panoptic_source", "read_coco_panoptic", "read_sim_panoptic", "TorchPanoptic"]

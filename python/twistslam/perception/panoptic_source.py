@@ -17,7 +17,11 @@ from .panoptic_files import CocoPanopticFiles, SimPanopticFiles
 from .panoptic_from_boxes import BoxMaskConfig, PanopticFromBoxes
 
 #: the sources :func:`panoptic_source` builds
-PANOPTIC_KINDS = ("auto", "files", "coco", "boxes")
+PANOPTIC_KINDS = ("auto", "files", "coco", "boxes", "torch")
+#: keys of the ``weights`` mapping of the "torch" source (arguments of TorchPanoptic)
+TORCH_WEIGHT_KEYS = {"maskrcnn": "maskrcnn_weights", "semantic": "semantic_weights",
+                     "semantic_classes": "semantic_classes",
+                     "num_semantic_classes": "num_semantic_classes"}
 
 
 @runtime_checkable
@@ -54,20 +58,26 @@ def _sim_folder(sequence, labels_dir: str) -> Path | None:
 
 def panoptic_source(kind: str = "auto", sequence=None, *, boxes=None,
                     coco_folder: str | Path | None = None, coco_json: str | Path | None = None,
-                    box_config: BoxMaskConfig | None = None, labels_dir: str = "panoptic"):
+                    box_config: BoxMaskConfig | None = None, labels_dir: str = "panoptic",
+                    weights: dict | None = None):
     """The panoptic stage of ``kind`` for ``sequence``.
 
     Parameters
     ----------
     kind : "auto" (the sequence's panoptic files when it has them, else masks from ``boxes``),
         "files" (simulator / Cityscapes ``instanceIds`` PNGs), "coco" (COCO panoptic PNGs +
-        JSON) or "boxes" (masks from 3D boxes and the LiDAR scan).
+        JSON), "boxes" (masks from 3D boxes and the LiDAR scan) or "torch" (a Mask R-CNN
+        and a semantic network from weight files, :class:`~.panoptic_torch.TorchPanoptic`).
     sequence : a sequence on disk (``base``, ``seq``), needed by "files".
     boxes : :class:`~twistslam.datasets.ObjectTable` of 3D boxes (detections), for "boxes".
     coco_folder, coco_json : the PNG folder and JSON file of "coco".
+    weights : the files of "torch": ``{"maskrcnn": FILE, "semantic": FILE}`` (semantic
+        optional), plus optionally ``"semantic_classes"`` and ``"num_semantic_classes"``.
     """
     if kind not in PANOPTIC_KINDS:
         raise ValueError(f"panoptic source '{kind}': expected one of {', '.join(PANOPTIC_KINDS)}")
+    if kind == "torch":
+        return _torch_source(weights)
     folder = _sim_folder(sequence, labels_dir)
     if kind == "files" or (kind == "auto" and folder is not None):
         if folder is None:
@@ -82,3 +92,17 @@ def panoptic_source(kind: str = "auto", sequence=None, *, boxes=None,
         raise ValueError(f"panoptic source '{kind}': no panoptic files and no 3D boxes "
                          "(pass boxes=detections, or kind='coco' with its files)")
     return PanopticFromBoxes(boxes, box_config or BoxMaskConfig())
+
+
+def _torch_source(weights: dict | None):
+    if not weights or not weights.get("maskrcnn"):
+        raise ValueError("panoptic source 'torch' needs weights={'maskrcnn': FILE, 'semantic': "
+                         "FILE} (twistslam.run: segmentation_weights=...; command line: "
+                         "--maskrcnn-weights FILE --semantic-weights FILE); nothing is downloaded")
+    unknown = sorted(set(weights) - set(TORCH_WEIGHT_KEYS))
+    if unknown:
+        raise ValueError(f"panoptic source 'torch': unknown weights keys {unknown}; expected "
+                         f"{', '.join(TORCH_WEIGHT_KEYS)}")
+    from .panoptic_torch import TorchPanoptic
+
+    return TorchPanoptic(**{TORCH_WEIGHT_KEYS[k]: v for k, v in weights.items() if v is not None})

@@ -3,6 +3,7 @@ a sequence gets, from a name or a user's callable.
 
 ``segmentation``: ``"auto"`` (the sequence's panoptic files when it has them, else masks from
 its 3D detections and LiDAR scans when it has both, else none), ``"files"``, ``"boxes"``,
+``"torch"`` (a Mask R-CNN and a semantic network; needs ``segmentation_weights``),
 ``"none"`` / ``None``, or any callable ``frame -> Panoptic | (class_id, instance_id)``.
 ``flow``: ``"auto"`` (files when present, else OpenCV DIS), ``"files"``, ``"dis"``, ``"raft"``
 (needs ``flow_weights``), ``"none"`` / ``None``, or any callable ``(previous, current) ->
@@ -23,7 +24,7 @@ from .panoptic import Panoptic
 from .panoptic_source import check_panoptic, panoptic_source
 from .stage import check_flow
 
-SEGMENTATION_KINDS = ("auto", "files", "boxes", "none")
+SEGMENTATION_KINDS = ("auto", "files", "boxes", "torch", "none")
 
 
 def find_detections(sequence) -> Path | None:
@@ -80,7 +81,7 @@ class Perception:
         return np.ascontiguousarray(check_flow(self.flow(previous, current), shape, self.flow_name))
 
 
-def _segmentation(kind, sequence, detections) -> tuple[Callable | None, str, bool]:
+def _segmentation(kind, sequence, detections, weights=None) -> tuple[Callable | None, str, bool]:
     if kind is None or kind == "none":
         return None, "none", False
     if callable(kind):
@@ -100,6 +101,8 @@ def _segmentation(kind, sequence, detections) -> tuple[Callable | None, str, boo
         kind = "boxes"
     if kind == "files":
         return panoptic_source("files", sequence), "files", False
+    if kind == "torch":
+        return panoptic_source("torch", sequence, weights=weights), "torch", False
     from ..objects.detections_input import load_detections
 
     if detections is None:
@@ -112,17 +115,23 @@ def _segmentation(kind, sequence, detections) -> tuple[Callable | None, str, boo
 
 
 def perception_stages(sequence, segmentation: Any = "auto", flow: Any = "auto", *,
-                      detections: Any = None, flow_weights: str | Path | None = None) -> Perception:
+                      detections: Any = None, flow_weights: str | Path | None = None,
+                      segmentation_weights: dict | None = None) -> Perception:
     """The segmentation and flow stages for ``sequence`` (see the module docstring).
+    ``segmentation_weights``: the files of ``segmentation="torch"``, ``{"maskrcnn": FILE,
+    "semantic": FILE}`` (see :func:`~.panoptic_source.panoptic_source`).
 
     Raises
     ------
     ValueError
-        An unknown source name.
+        An unknown source name; "torch" without its weights or with a file that is not that
+        network's state dict.
     FileNotFoundError
-        "files" without files, "boxes" without detections, "raft" without weights.
+        "files" without files, "boxes" without detections, a weight file of "raft" or
+        "torch" that does not exist.
     """
-    seg, seg_name, needs_lidar = _segmentation(segmentation, sequence, detections)
+    seg, seg_name, needs_lidar = _segmentation(segmentation, sequence, detections,
+                                               segmentation_weights)
     if seg is None or flow is None or flow == "none":
         return Perception(seg, None, seg_name, "none", needs_lidar)
     if callable(flow):
