@@ -7,7 +7,8 @@ the current :class:`~twistslam.datasets.Frame`, it returns (H, W, 2) float32 (u,
   PNG; ``.flo`` is read too). File N holds the flow from frame N to frame N + 1, as the
   simulator writes it (and as KITTI's ``NNNNNN_10.png`` is the flow from image 10 to 11).
 - ``dis``: OpenCV DIS in the C++ core, the default classical source (no weights).
-- ``raft``: torchvision RAFT from a weight file the user names (:mod:`.flow_raft`).
+- ``raft``: RAFT (``raft_small`` / ``raft_large``, plain torch, torchvision's state-dict layout) from a
+  weight file the user names (:mod:`.flow_raft`).
 """
 
 from __future__ import annotations
