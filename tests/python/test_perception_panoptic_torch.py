@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from twistslam.datasets import Frame
 from twistslam.perception import Panoptic, TorchPanoptic, panoptic_source
@@ -381,3 +382,29 @@ def test_full_size_models_have_torchvisions_layout(builder, keys, documented):
     count = sum(p.numel() for p in model.parameters())
     assert abs(count - documented) <= 1e-3 * documented, count
     assert key_layout(model) == (DATA / keys).read_text().splitlines()
+
+
+def test_run_with_the_torch_segmentation(tmp_path, monkeypatch):
+    """twistslam.run(segmentation="torch", segmentation_weights=...) on a tiny sequence (the
+    core replaced by the pipeline tests' double): the core receives the stage's labels."""
+    import twistslam
+    from test_pipeline import SEQ, FakeSystem, write_tiny_sequence
+
+    FakeSystem.instances = []
+    monkeypatch.setattr("twistslam.slam._new_system", FakeSystem)
+    root = write_tiny_sequence(tmp_path / "data", frames=2)
+    torch.save(tiny_detector().state_dict(), tmp_path / "maskrcnn.pth")
+    torch.save(tiny_semantic().state_dict(), tmp_path / "semantic.pth")
+    weights = {"maskrcnn": tmp_path / "maskrcnn.pth", "semantic": tmp_path / "semantic.pth",
+               "semantic_classes": SEMANTIC_CLASSES}
+    with pytest.warns(UserWarning):  # the tiny sequence has no LiDAR
+        result = twistslam.run((root, SEQ), progress=False, segmentation="torch", flow="none",
+                               segmentation_weights=weights)
+    assert result.segmentation == "torch" and len(result) == 2
+    calls = FakeSystem.instances[-1].calls
+    image = np.asarray(Image.open(root / "training" / "image_02" / SEQ / "000001.png"))
+    expected = TorchPanoptic(maskrcnn_weights=weights["maskrcnn"], semantic_weights=weights["semantic"],
+                             semantic_classes=SEMANTIC_CLASSES)(frame(1, image))
+    np.testing.assert_array_equal(calls[1]["labels"], expected.class_id)
+    np.testing.assert_array_equal(calls[1]["instances"], expected.instance_id)
+    assert expected.instance_id.any() and len(np.unique(expected.class_id)) >= 3  # not trivial

@@ -198,7 +198,8 @@ class TorchPanoptic:
             raise ValueError(f"torch panoptic: frame {index} image must be uint8 (H, W) or "
                              f"(H, W, 3) RGB, got {image.dtype} {image.shape}")
         rgb = np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image
-        x = self.torch.from_numpy(np.ascontiguousarray(rgb)).permute(2, 0, 1).float() / 255.0
+        # a copy: frames may hold read-only arrays, which torch.from_numpy warns about
+        x = self.torch.from_numpy(np.array(rgb)).permute(2, 0, 1).float() / 255.0
         return x.to(self.device)
 
     def _stuff(self, image) -> np.ndarray:
