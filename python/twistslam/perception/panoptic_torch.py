@@ -129,7 +129,8 @@ class TorchPanoptic:
         ``semantic(batch)["out"]`` -> logits).
     thing_classes : detector label -> Cityscapes id; default: COCO category ids through
         :data:`COCO_CATEGORY_NAMES` and :data:`CLASS_NAME_TO_CITYSCAPES`; other labels are
-        not painted.
+        not painted. Only detections of Cityscapes thing classes (people, vehicles) get an
+        instance id; a traffic light or stop sign paints its class with instance 0.
     score_threshold : :data:`DETECTION_SCORE` (probability).
     mask_threshold : :data:`MASK_PROBABILITY` (probability).
     semantic_min_size : :data:`SEMANTIC_MIN_SIZE` (pixels).
