@@ -1,0 +1,209 @@
+// The life cycle of an object cluster (paper sec. "Clusters creation"): new clusters from
+// instance masks, points joining and being culled, re-seeding after a failure, the sliding
+// window of e_dyna + e_const, and re-centring of the object frame. Search and twist
+// estimation are in object_tracker.cpp.
+#include <algorithm>
+
+#include "geometry/link_projection.hpp"
+#include "geometry/se3.hpp"
+#include "optim/visual_object_window.hpp"
+#include "tracking/object_point_helpers.hpp"
+#include "tracking/object_tracker.hpp"
+
+namespace twistslam::tracking {
+
+using detail::contains;
+using detail::median_point;
+using detail::observe;
+using detail::transform;
+
+std::vector<std::pair<int, Vec3>> ObjectTracker::free_instance_points(const Frame& frame,
+                                                                      int instance) const {
+  std::vector<std::pair<int, Vec3>> out;
+  const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
+  const map::StereoKeypoints& k = frame.keypoints;
+  for (int i = 0; i < static_cast<int>(k.size()); ++i) {
+    if (instance_of_keypoint_[i] != instance || claimed_by_[i] >= 0 || !k.has_depth(i) ||
+        k.depth[i] > options_.max_depth_m)
+      continue;
+    out.emplace_back(i, transform(T_w_c, camera_.backproject(k.uv[i], k.depth[i])));
+  }
+  return out;
+}
+
+void ObjectTracker::add_points(int c, const Frame& frame, int instance) {
+  objects::ObjectCluster& cluster = clusters_[c];
+  if (static_cast<int>(cluster.points.size()) >= options_.max_points) return;
+  const auto fresh = free_instance_points(frame, instance);
+  if (fresh.empty()) return;
+  const Mat4 T_o_w = geometry::se3_inverse(tracks_[c].last().T_w_o);
+  std::vector<Vec3> existing;
+  for (const auto& p : cluster.points) existing.push_back(p.X_o);
+  const Vec3 centre = existing.empty() ? Vec3::Zero() : median_point(existing);
+  for (const auto& [k, X_w] : fresh) {
+    if (static_cast<int>(cluster.points.size()) >= options_.max_points) break;
+    objects::ObjectPoint p;
+    p.X_o = transform(T_o_w, X_w);
+    if ((p.X_o - centre).norm() > options_.max_point_spread_m) continue;
+    p.descriptor = frame.keypoints.descriptors[k];
+    observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
+            options_.window_frames);
+    p.class_votes.add(frame.keypoints.label[k]);
+    cluster.points.push_back(p);
+    claimed_by_[k] = c;
+  }
+}
+
+bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o) {
+  const auto fresh = free_instance_points(frame, instance);
+  if (static_cast<int>(fresh.size()) < options_.min_new_cluster_points) return false;
+  std::vector<Vec3> X;
+  for (const auto& f : fresh) X.push_back(f.second);
+  const Vec3 median = median_point(X);
+  std::vector<std::pair<int, Vec3>> kept;
+  Vec3 centroid = Vec3::Zero();
+  for (const auto& f : fresh)
+    if ((f.second - median).norm() <= options_.max_point_spread_m) kept.push_back(f), centroid += f.second;
+  if (static_cast<int>(kept.size()) < options_.min_new_cluster_points) return false;
+  centroid /= static_cast<double>(kept.size());
+  objects::ObjectCluster& cluster = clusters_[c];
+  // A cluster without a velocity yet (it failed in its second frame) has no prediction worth
+  // keeping: its origin moves to the new points' centroid, as a new cluster's would, and its
+  // one-frame-old points go. An older cluster keeps its points at the predicted pose: they
+  // hold its extent (the box until detections give sizes), and the unmatched ones are culled.
+  if (cluster.velocity.isZero()) {
+    T_w_o->topRightCorner<3, 1>() = centroid;
+    cluster.points.clear();
+  }
+  const Mat4 T_o_w = geometry::se3_inverse(*T_w_o);
+  for (const auto& [k, X_w] : kept) {
+    if (static_cast<int>(cluster.points.size()) >= options_.max_points) break;
+    objects::ObjectPoint p;
+    p.X_o = transform(T_o_w, X_w);
+    p.descriptor = frame.keypoints.descriptors[k];
+    observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
+            options_.window_frames);
+    p.class_votes.add(frame.keypoints.label[k]);
+    cluster.points.push_back(p);
+    claimed_by_[k] = c;
+  }
+  return true;
+}
+
+bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id, const Vec3& up_w) {
+  const auto fresh = free_instance_points(frame, instance);
+  if (static_cast<int>(fresh.size()) < options_.min_new_cluster_points) return false;
+  std::vector<Vec3> X;
+  for (const auto& f : fresh) X.push_back(f.second);
+  const Vec3 median = median_point(X);
+  std::vector<std::pair<int, Vec3>> kept;
+  Vec3 centroid = Vec3::Zero();
+  for (const auto& f : fresh)
+    if ((f.second - median).norm() <= options_.max_point_spread_m) kept.push_back(f), centroid += f.second;
+  if (static_cast<int>(kept.size()) < options_.min_new_cluster_points) return false;
+  centroid /= static_cast<double>(kept.size());
+
+  objects::ObjectTrack track;
+  track.id = next_id_++;
+  track.class_id = class_id;
+  const bool planar = contains(options_.planar_class_ids, class_id);
+  track.link = planar ? geometry::LinkType::kPlanar : geometry::LinkType::kFree;
+  track.Pi = planar ? geometry::projector_planar(up_w) : geometry::projector_free();
+  track.state = objects::TrackState::kTentative;
+  objects::TrackFrame row;
+  row.frame = frame.index;
+  row.T_w_o.topRightCorner<3, 1>() = centroid;  // identity rotation at the centroid (issue 10)
+  row.detected = true;
+  row.reported = true;
+  track.frames.push_back(row);
+  track.hits = 1;
+  track.confirmed_frame = frame.index;
+  track.state = objects::TrackState::kConfirmed;
+
+  objects::ObjectCluster cluster;
+  cluster.track_id = track.id;
+  cluster.instance = instance;
+  cluster.class_votes.add(class_id);
+  const int c = static_cast<int>(clusters_.size());
+  for (const auto& [k, X_w] : kept) {
+    if (static_cast<int>(cluster.points.size()) >= options_.max_points) break;
+    objects::ObjectPoint p;
+    p.X_o = X_w - centroid;
+    p.descriptor = frame.keypoints.descriptors[k];
+    observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
+            options_.window_frames);
+    p.class_votes.add(frame.keypoints.label[k]);
+    cluster.points.push_back(p);
+    claimed_by_[k] = c;
+  }
+  tracks_.push_back(std::move(track));
+  clusters_.push_back(std::move(cluster));
+  return true;
+}
+
+void ObjectTracker::refine_window(int c) {
+  objects::ObjectTrack& track = tracks_[c];
+  objects::ObjectCluster& cluster = clusters_[c];
+  const int rows = std::min<int>(options_.window_frames, static_cast<int>(track.frames.size()));
+  if (rows < 3) return;
+  const int first = static_cast<int>(track.frames.size()) - rows;
+  optim::VisualObjectWindow w;
+  for (int r = first; r < first + rows; ++r) {
+    const auto cam = T_c_w_of_frame_.find(track.frames[r].frame);
+    if (cam == T_c_w_of_frame_.end()) return;  // a frame without a camera pose (lost)
+    w.T_c_w.push_back(cam->second);
+    w.T_w_o.push_back(track.frames[r].T_w_o);
+  }
+  const int first_frame = track.frames[first].frame;
+  std::vector<int> used;  // cluster point index per window point
+  for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) {
+    const objects::ObjectPoint& p = cluster.points[i];
+    bool any = false;
+    for (const auto& o : p.history) {
+      const int f = o.frame - first_frame;
+      if (f < 0 || f >= rows) continue;
+      if (!any) used.push_back(i), w.X_o.push_back(p.X_o), any = true;
+      w.observations.push_back({f, static_cast<int>(w.X_o.size()) - 1, o.uv, o.u_right,
+                                weights_.at(o.octave)});
+    }
+  }
+  optim::VisualObjectWindowOptions wo;
+  wo.use_const = options_.use_const;
+  wo.const_sigma_translation = options_.const_sigma_translation;
+  wo.const_sigma_rotation = options_.const_sigma_rotation;
+  wo.max_iterations = options_.window_iterations;
+  if (!optim::refine_visual_object_window(camera_, w, track.Pi, wo).usable) return;
+  for (int r = 1; r < rows; ++r) track.frames[first + r].T_w_o = w.T_w_o[r];
+  for (int r = 0; r + 1 < rows; ++r)  // eq. 2: the twist linking consecutive poses
+    track.frames[first + r].xi = track.Pi * geometry::twist_between(w.T_w_o[r], w.T_w_o[r + 1]);
+  cluster.velocity = track.frames[first + rows - 2].xi;
+  for (size_t k = 0; k < used.size(); ++k) cluster.points[used[k]].X_o = w.X_o[k];
+}
+
+void ObjectTracker::recenter(int c) {
+  if (!(options_.recenter_distance_m > 0)) return;
+  objects::ObjectCluster& cluster = clusters_[c];
+  std::vector<Vec3> confirmed;
+  for (const objects::ObjectPoint& p : cluster.points)
+    if (p.found >= 2) confirmed.push_back(p.X_o);
+  if (static_cast<int>(confirmed.size()) < options_.min_inliers) return;
+  const Vec3 centre = median_point(confirmed);
+  if (centre.norm() <= options_.recenter_distance_m) return;
+  // T_w_o' = T_w_o T_o_o' with T_o_o' a translation by centre: the twists of eq. 2 act on the
+  // left (T_w_o(i+1) = exp(Pi xi) T_w_o(i)), so they are unchanged
+  for (objects::TrackFrame& row : tracks_[c].frames)
+    row.T_w_o.topRightCorner<3, 1>() += row.T_w_o.topLeftCorner<3, 3>() * centre;
+  for (objects::ObjectPoint& p : cluster.points) p.X_o -= centre;
+}
+
+void ObjectTracker::cull(objects::ObjectCluster& cluster) const {
+  auto& pts = cluster.points;
+  pts.erase(std::remove_if(pts.begin(), pts.end(),
+                           [&](const objects::ObjectPoint& p) {
+                             return p.visible >= options_.cull_after_visible &&
+                                    p.found_ratio() < options_.min_found_ratio;
+                           }),
+            pts.end());
+}
+
+}  // namespace twistslam::tracking

@@ -1,0 +1,39 @@
+#pragma once
+// Small helpers shared by the object tracker's search/update (object_tracker.cpp) and its
+// cluster life cycle (object_clusters.cpp). Internal to cpp/tracking.
+#include <algorithm>
+#include <vector>
+
+#include "geometry/types.hpp"
+#include "objects/object_cluster.hpp"
+
+namespace twistslam::tracking::detail {
+
+// The point's latest observation, also appended to its bounded history (window BA).
+inline void observe(objects::ObjectPoint& p, const objects::ObjectPointObservation& o, int window) {
+  p.last = o;
+  p.history.push_back(o);
+  if (static_cast<int>(p.history.size()) > std::max(window, 1)) p.history.erase(p.history.begin());
+}
+
+inline Vec3 transform(const Mat4& T, const Vec3& X) {
+  return T.topLeftCorner<3, 3>() * X + T.topRightCorner<3, 1>();
+}
+
+// Per-axis median of the points (robust centre: a mask bleeding onto the background gives a
+// few far points that a mean would follow). points must not be empty.
+inline Vec3 median_point(std::vector<Vec3> points) {
+  Vec3 m;
+  for (int a = 0; a < 3; ++a) {
+    std::nth_element(points.begin(), points.begin() + points.size() / 2, points.end(),
+                     [a](const Vec3& x, const Vec3& y) { return x[a] < y[a]; });
+    m[a] = points[points.size() / 2][a];
+  }
+  return m;
+}
+
+inline bool contains(const std::vector<int>& ids, int id) {
+  return std::find(ids.begin(), ids.end(), id) != ids.end();
+}
+
+}  // namespace twistslam::tracking::detail
