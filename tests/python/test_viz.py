@@ -225,7 +225,7 @@ def test_run_parser_viz_flags():
     assert args.viz_save == Path("rec.rrd")
 
 
-@pytest.mark.parametrize("option, value", [("--segmentation", "torch"), ("--flow", "farneback")])
+@pytest.mark.parametrize("option, value", [("--segmentation", "detectron"), ("--flow", "farneback")])
 def test_run_parser_rejects_unknown_sources(option, value, capsys):
     with pytest.raises(SystemExit) as exit_info:
         cli.build_parser().parse_args(["run", "data", "--out", "out", option, value])
