@@ -31,6 +31,34 @@ std::vector<std::pair<int, Vec3>> ObjectTracker::free_instance_points(const Fram
   return out;
 }
 
+bool ObjectTracker::seed_points(const Frame& frame, int instance,
+                                std::vector<std::pair<int, Vec3>>* kept, Vec3* centroid) const {
+  const auto fresh = free_instance_points(frame, instance);
+  if (static_cast<int>(fresh.size()) < options_.min_new_cluster_points) return false;
+  std::vector<Vec3> X;
+  for (const auto& f : fresh) X.push_back(f.second);
+  const Vec3 median = median_point(X);
+  kept->clear();
+  *centroid = Vec3::Zero();
+  for (const auto& f : fresh)
+    if ((f.second - median).norm() <= options_.max_point_spread_m) kept->push_back(f), *centroid += f.second;
+  if (static_cast<int>(kept->size()) < options_.min_new_cluster_points) return false;
+  *centroid /= static_cast<double>(kept->size());
+  return true;
+}
+
+void ObjectTracker::append_point(objects::ObjectCluster& cluster, int c, const Frame& frame, int k,
+                                 const Vec3& X_o) {
+  objects::ObjectPoint p;
+  p.X_o = X_o;
+  p.descriptor = frame.keypoints.descriptors[k];
+  observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
+          options_.window_frames);
+  p.class_votes.add(frame.keypoints.label[k]);
+  cluster.points.push_back(p);
+  claimed_by_[k] = c;
+}
+
 void ObjectTracker::add_points(int c, const Frame& frame, int instance) {
   objects::ObjectCluster& cluster = clusters_[c];
   if (static_cast<int>(cluster.points.size()) >= options_.max_points) return;
@@ -42,30 +70,16 @@ void ObjectTracker::add_points(int c, const Frame& frame, int instance) {
   const Vec3 centre = existing.empty() ? Vec3::Zero() : median_point(existing);
   for (const auto& [k, X_w] : fresh) {
     if (static_cast<int>(cluster.points.size()) >= options_.max_points) break;
-    objects::ObjectPoint p;
-    p.X_o = transform(T_o_w, X_w);
-    if ((p.X_o - centre).norm() > options_.max_point_spread_m) continue;
-    p.descriptor = frame.keypoints.descriptors[k];
-    observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
-            options_.window_frames);
-    p.class_votes.add(frame.keypoints.label[k]);
-    cluster.points.push_back(p);
-    claimed_by_[k] = c;
+    const Vec3 X_o = transform(T_o_w, X_w);
+    if ((X_o - centre).norm() > options_.max_point_spread_m) continue;
+    append_point(cluster, c, frame, k, X_o);
   }
 }
 
 bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o) {
-  const auto fresh = free_instance_points(frame, instance);
-  if (static_cast<int>(fresh.size()) < options_.min_new_cluster_points) return false;
-  std::vector<Vec3> X;
-  for (const auto& f : fresh) X.push_back(f.second);
-  const Vec3 median = median_point(X);
   std::vector<std::pair<int, Vec3>> kept;
-  Vec3 centroid = Vec3::Zero();
-  for (const auto& f : fresh)
-    if ((f.second - median).norm() <= options_.max_point_spread_m) kept.push_back(f), centroid += f.second;
-  if (static_cast<int>(kept.size()) < options_.min_new_cluster_points) return false;
-  centroid /= static_cast<double>(kept.size());
+  Vec3 centroid;
+  if (!seed_points(frame, instance, &kept, &centroid)) return false;
   objects::ObjectCluster& cluster = clusters_[c];
   // A cluster without a velocity yet (it failed in its second frame) has no prediction worth
   // keeping: its origin moves to the new points' centroid, as a new cluster's would, and its
@@ -78,30 +92,15 @@ bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o)
   const Mat4 T_o_w = geometry::se3_inverse(*T_w_o);
   for (const auto& [k, X_w] : kept) {
     if (static_cast<int>(cluster.points.size()) >= options_.max_points) break;
-    objects::ObjectPoint p;
-    p.X_o = transform(T_o_w, X_w);
-    p.descriptor = frame.keypoints.descriptors[k];
-    observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
-            options_.window_frames);
-    p.class_votes.add(frame.keypoints.label[k]);
-    cluster.points.push_back(p);
-    claimed_by_[k] = c;
+    append_point(cluster, c, frame, k, transform(T_o_w, X_w));
   }
   return true;
 }
 
 bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id, const Vec3& up_w) {
-  const auto fresh = free_instance_points(frame, instance);
-  if (static_cast<int>(fresh.size()) < options_.min_new_cluster_points) return false;
-  std::vector<Vec3> X;
-  for (const auto& f : fresh) X.push_back(f.second);
-  const Vec3 median = median_point(X);
   std::vector<std::pair<int, Vec3>> kept;
-  Vec3 centroid = Vec3::Zero();
-  for (const auto& f : fresh)
-    if ((f.second - median).norm() <= options_.max_point_spread_m) kept.push_back(f), centroid += f.second;
-  if (static_cast<int>(kept.size()) < options_.min_new_cluster_points) return false;
-  centroid /= static_cast<double>(kept.size());
+  Vec3 centroid;
+  if (!seed_points(frame, instance, &kept, &centroid)) return false;
 
   objects::ObjectTrack track;
   track.id = next_id_++;
@@ -127,14 +126,7 @@ bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id
   const int c = static_cast<int>(clusters_.size());
   for (const auto& [k, X_w] : kept) {
     if (static_cast<int>(cluster.points.size()) >= options_.max_points) break;
-    objects::ObjectPoint p;
-    p.X_o = X_w - centroid;
-    p.descriptor = frame.keypoints.descriptors[k];
-    observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
-            options_.window_frames);
-    p.class_votes.add(frame.keypoints.label[k]);
-    cluster.points.push_back(p);
-    claimed_by_[k] = c;
+    append_point(cluster, c, frame, k, X_w - centroid);
   }
   tracks_.push_back(std::move(track));
   clusters_.push_back(std::move(cluster));

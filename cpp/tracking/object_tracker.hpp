@@ -80,6 +80,13 @@ class ObjectTracker {
   void add_points(int c, const Frame& frame, int instance);
   // Stereo keypoints of `instance` no cluster claimed, in the world frame.
   std::vector<std::pair<int, Vec3>> free_instance_points(const Frame& frame, int instance) const;
+  // The free stereo points of `instance` within max_point_spread_m of their median, and
+  // their centroid (world frame); false with fewer than min_new_cluster_points.
+  bool seed_points(const Frame& frame, int instance, std::vector<std::pair<int, Vec3>>* kept,
+                   Vec3* centroid) const;
+  // A new point of cluster c (index into clusters_) from keypoint k at X_o; claims k.
+  void append_point(objects::ObjectCluster& cluster, int c, const Frame& frame, int k,
+                    const Vec3& X_o);
   bool start_cluster(const Frame& frame, int instance, int class_id, const Vec3& up_w);
   // The free stereo points of `instance` join the cluster, placed with *T_w_o (the
   // prediction; a cluster without velocity moves to their centroid and drops its old points).
