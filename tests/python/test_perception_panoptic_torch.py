@@ -17,7 +17,7 @@ from twistslam.perception import Panoptic, TorchPanoptic, panoptic_source
 from twistslam.perception.panoptic import DEFAULT_DYNAMIC_CLASSES
 from twistslam.perception.run_stages import perception_stages
 
-torch = pytest.importorskip("torch")
+import torch  # noqa: E402  the models extra, which make setup installs: a missing torch fails here
 
 from twistslam.perception.torch_models import box_ops  # noqa: E402
 from twistslam.perception.torch_models.box_ops import BoxCoder, batched_nms, nms  # noqa: E402
