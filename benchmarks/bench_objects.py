@@ -48,7 +48,7 @@ import twistslam
 from twistslam.datasets import read_poses
 from twistslam.demo import MOVABLE_CLASSES, cached_sequence
 from twistslam.eval import evaluate_camera
-from twistslam.eval.object_tracks import evaluate_object_tracks, load_ground_truth
+from twistslam.eval.object_tracks import MAX_OCCLUSION, evaluate_object_tracks, load_ground_truth
 from twistslam.objects.result import TrackedObject
 from twistslam.objects.visual import VisualObjects
 from twistslam.timings import Timings
@@ -211,6 +211,9 @@ def main(argv: list[str] | None = None) -> int:
                         help=f"raft_small state dict for the raft row (default: ${RAFT_WEIGHTS_ENV})")
     parser.add_argument("--raft-frames", type=int, default=RAFT_FRAMES, metavar="N",
                         help="frames of the raft row")
+    parser.add_argument("--max-occlusion", type=int, default=MAX_OCCLUSION, choices=[0, 1, 2],
+                        help="evaluate car frames up to this KITTI occlusion level "
+                             f"(default {MAX_OCCLUSION}, moderate; 2: every occlusion)")
     args = parser.parse_args(argv)
 
     print(f"RPE_t m/m, RPE_r deg/m, ATE_al m (means over moving cars); camera ATE m, RPE m and "
@@ -235,7 +238,8 @@ def main(argv: list[str] | None = None) -> int:
                         continue
                 if args.gt_as_estimate:  # the config does not matter here
                     result = gt_as_estimate(gt, np.random.default_rng(seed))
-                ev = evaluate_object_tracks(result.objects.reported(), result.camera_poses, gt)
+                ev = evaluate_object_tracks(result.objects.reported(), result.camera_poses, gt,
+                                            max_occlusion=args.max_occlusion)
                 cam = evaluate_camera(gt_cam, result.camera_poses)
                 print(format_row(label, name, ev, cam, result), flush=True)
                 if args.per_car:

@@ -6,7 +6,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from twistslam.eval.object_tracks import (
-    MAX_RANGE_M, MIN_BOX_HEIGHT_PX, MIN_VISIBLE_FRAMES, GtTrack, SequenceGroundTruth,
+    MAX_OCCLUSION, MAX_RANGE_M, MIN_BOX_HEIGHT_PX, MIN_VISIBLE_FRAMES, GtTrack, SequenceGroundTruth,
     estimate_offset, evaluate_object_tracks, evaluated_cars, load_ground_truth, selected_frames,
 )
 from twistslam.objects.result import TrackedObject
@@ -235,6 +235,30 @@ def test_a_car_hidden_all_along_is_not_evaluated_and_a_track_on_it_is_no_ghost(w
     assert [c.gt_id for c in ev.cars] == [1] and ev.ghost_ids == []
 
 
+def test_frames_hidden_beyond_the_moderate_occlusion_level_are_not_evaluated(world):
+    gt, A, cams = world
+    assert MAX_OCCLUSION == 1  # KITTI moderate: "partly occluded" at most
+    car = gt.tracks[1]
+    rng = np.random.default_rng(11)
+    car.occlusion = rng.integers(0, 3, FRAMES)
+    hidden = car.frames[car.occlusion == 2]
+    seen = car.frames[car.occlusion <= 1]
+    assert len(hidden) and len(seen) >= MIN_VISIBLE_FRAMES
+    np.testing.assert_array_equal(selected_frames(car, gt.T_w_c), seen)
+    np.testing.assert_array_equal(selected_frames(car, gt.T_w_c, max_occlusion=2), car.frames)
+    np.testing.assert_array_equal(selected_frames(car, gt.T_w_c, max_occlusion=0),
+                                  car.frames[car.occlusion == 0])
+    # an estimate only where the car is seen: fully covered under the rule, not without it
+    est = [estimate_of(gt, A, 1, OFFSET, rng, frames=seen)]
+    row = evaluate_object_tracks(est, cams, gt).cars[0]
+    assert row.frames == len(seen) and row.coverage == 1.0
+    row_all = evaluate_object_tracks(est, cams, gt, max_occlusion=2).cars[0]
+    assert row_all.frames == FRAMES and row_all.coverage == pytest.approx(len(seen) / FRAMES)
+    # hidden in all but a few frames: not evaluated at all
+    car.occlusion = np.where(car.frames < MIN_VISIBLE_FRAMES - 1, 1, 2)
+    assert 1 not in evaluated_cars(gt) and 1 in evaluated_cars(gt, max_occlusion=2)
+
+
 def parse_label_heights(path):
     """``{(track id, frame): bottom - top}`` of a KITTI tracking label file, read directly."""
     heights = {}
@@ -245,14 +269,24 @@ def parse_label_heights(path):
     return heights
 
 
+def parse_label_occlusions(path):
+    """``{(track id, frame): occlusion level}`` of a KITTI tracking label file, read directly."""
+    return {(int(tok[1]), int(tok[0])): int(tok[4])
+            for tok in (line.split() for line in path.read_text(encoding="utf-8").splitlines()) if tok}
+
+
 def test_ground_truth_reads_the_box_heights_of_label_02(sim):
     gt = load_ground_truth(sim, "0000")
     heights = parse_label_heights(sim / "training" / "label_02" / "0000.txt")
+    occlusions = parse_label_occlusions(sim / "training" / "label_02" / "0000.txt")
+    assert set(occlusions.values()) <= {0, 1, 2}
     n_labelled = 0
     for tid, track in gt.tracks.items():
         expected = np.array([heights.get((tid, int(f)), np.nan) for f in track.frames])
         np.testing.assert_array_equal(track.box_height_px, expected)
         np.testing.assert_array_equal(track.labelled, np.isfinite(expected))
+        occlusion = np.array([occlusions.get((tid, int(f)), -1) for f in track.frames])
+        np.testing.assert_array_equal(track.occlusion, occlusion)
         n_labelled += track.labelled.sum()
     assert n_labelled > 0
     # the simulator labels cars seen through a gap: the rule must drop some labelled frames

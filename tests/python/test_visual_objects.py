@@ -122,3 +122,29 @@ def test_road_plane_is_fitted_from_the_road_keypoints(sim):
     # the camera world is the first camera frame: the road is y = +1.65 (y down)
     assert np.degrees(np.arccos(np.clip(n @ np.array([0.0, -1.0, 0.0]), -1, 1))) < 1.0
     assert abs(d - 1.65) < 0.05
+
+
+def test_rows_reseeded_from_the_instance_are_reported_and_predicted_ones_are_not():
+    from twistslam.objects.visual import visual_objects
+
+    frames = np.arange(4)
+    T_w_o = np.repeat(np.eye(4)[None], 4, 0)
+    T_w_o[:, 2, 3] = 10.0 + frames  # one metre per frame along the optical axis
+    rng = np.random.default_rng(3)
+    cluster = {
+        "id": 7, "class_id": 26, "state": "confirmed", "link": "planar", "hits": 2,
+        "frames": frames, "T_w_o": T_w_o, "points_o": rng.uniform(-1, 1, (40, 3)),
+        # row 0 tracked, 1 re-seeded (twist failed, instance seen), 2 predicted, 3 tracked
+        "detected": np.array([True, False, False, True]),
+        "reported": np.array([True, True, False, True]),
+    }
+    poses = {int(f): np.eye(4) for f in frames}
+    out = visual_objects([cluster], sequence=None, camera_poses=poses)
+    (obj,) = out.reported()
+    np.testing.assert_array_equal(obj.frames, [0, 1, 3])
+    np.testing.assert_array_equal(obj.T_w_o[:, 2, 3], [10.0, 11.0, 13.0])
+    np.testing.assert_array_equal(out.objects[0].detected, cluster["detected"])
+    # a frame without a camera pose is never reported
+    del poses[3]
+    (obj,) = visual_objects([cluster], sequence=None, camera_poses=poses).reported()
+    np.testing.assert_array_equal(obj.frames, [0, 1])

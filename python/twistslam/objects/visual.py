@@ -72,8 +72,10 @@ class VisualObjects:
         return self.objects[k]
 
     def reported(self) -> list[TrackedObject]:
-        """Each cluster restricted to its reported rows (frames with a valid twist): what the
-        evaluator compares; rows predicted through misses are left out."""
+        """Each cluster restricted to its reported rows: what the evaluator compares. A row is
+        reported when its twist was valid, or when the twist failed while the cluster's
+        instance was seen and its stereo points re-seeded the cluster (``detected`` False).
+        Rows predicted through misses are left out."""
         return [dataclasses.replace(o, frames=o.frames[o.reported], T_w_o=o.T_w_o[o.reported])
                 for o in self.objects if o.reported.any()]
 
@@ -113,7 +115,8 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
         T_o_box, size = box_from_points(points)
         cls = KITTI_TYPES.get(int(c["class_id"]), "Misc")
         T_w_box = T_w_o @ T_o_box
-        reported = np.asarray(c["detected"], dtype=bool) & np.isin(frames, list(camera_poses))
+        # the core's flag: a valid twist or a re-seed from the instance seen this frame
+        reported = np.asarray(c["reported"], dtype=bool) & np.isin(frames, list(camera_poses))
         track_id = int(c["id"])
         result.points_o[track_id] = points
         result.T_o_box[track_id] = T_o_box
