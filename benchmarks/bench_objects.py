@@ -83,6 +83,8 @@ ROWS = {r.name: r for r in [
     Row("kp-only", {SECTION: {"extra_keypoints": False}}),
     Row("kp-extra", {SECTION: {"extra_keypoints": True}}),
     Row("raft", flow="raft"),
+    # e_dyna in the keyframe BA (off by default): the camera columns are the comparison
+    Row("dyn-ba", {"local_ba": {"dynamic_objects": True}}),
 ]}
 #: environment variable naming the RAFT state-dict file when --raft-weights is not given
 RAFT_WEIGHTS_ENV = "TWISTSLAM_RAFT_WEIGHTS"

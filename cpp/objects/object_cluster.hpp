@@ -23,6 +23,7 @@ struct ObjectPoint {
   map::Descriptor descriptor{};
   ObjectPointObservation last;  // the latest observation (flow-guided search starts here)
   std::vector<ObjectPointObservation> history;  // the latest ones, oldest first (window BA)
+  std::vector<ObjectPointObservation> keyframe_history;  // those at keyframes (local BA's e_dyna)
   int visible = 1;              // frames in which it was predicted inside the image
   int found = 1;                // frames in which it was matched and an inlier
   LabelVotes class_votes;       // classes of its 2D observations (S3LAM-style vote)

@@ -1,5 +1,5 @@
 // Local bundle adjustment: builds the Ceres problem of paper eq. 9 through ProblemBuilder
-// (static reprojection term e_stat for now), solves it in two passes with the outliers of the
+// (e_stat here; e_dyna and e_link of the problem's objects in ba_dynamic_terms.cpp), solves it in two passes with the outliers of the
 // first pass removed (ORB-SLAM's local BA scheme), writes the result back.
 #include "optim/bundle_adjustment.hpp"
 
@@ -10,43 +10,21 @@
 #include <string>
 
 #include "geometry/se3.hpp"
+#include "optim/ba_terms.hpp"
 #include "optim/pose_parameterization.hpp"
-#include "optim/problem_builder.hpp"
-#include "optim/stereo_projection.hpp"
 
 namespace twistslam::optim {
 
 namespace {
 
+using detail::DynamicReprojectionTerms;
 using detail::huber_rho;
-using detail::predict_measurement;
+using detail::ObservationError;
 using detail::ProblemBuilder;
-
-struct ObservationError {
-  bool in_front = false;  // the point is in front of the camera(s)
-  double chi2 = 0;        // inv_sigma2 * |error|^2
-  double sq_px = 0;       // |error|^2 in pixels^2
-  int dims = 0;           // 3 stereo, 2 mono
-};
 
 ObservationError observation_error(const geometry::StereoCamera& cam, const Mat4& T_c_w,
                                    const Vec3& X_w, const BAObservation& o, double min_depth) {
-  ObservationError e;
-  const Vec3 X_c = T_c_w.topLeftCorner<3, 3>() * X_w + T_c_w.topRightCorner<3, 1>();
-  if (o.u_right >= 0) {
-    Vec3 z;
-    e.dims = 3;
-    if (!predict_measurement<3>(cam, X_c, min_depth, &z, nullptr)) return e;
-    e.sq_px = (z - Vec3(o.uv.x(), o.uv.y(), o.u_right)).squaredNorm();
-  } else {
-    Vec2 z;
-    e.dims = 2;
-    if (!predict_measurement<2>(cam, X_c, min_depth, &z, nullptr)) return e;
-    e.sq_px = (z - o.uv).squaredNorm();
-  }
-  e.in_front = std::isfinite(e.sq_px);
-  e.chi2 = o.inv_sigma2 * e.sq_px;
-  return e;
+  return detail::observation_error(cam, T_c_w, X_w, o.uv, o.u_right, o.inv_sigma2, min_depth);
 }
 
 bool valid_camera(const geometry::StereoCamera& cam) {
@@ -83,7 +61,8 @@ class StaticReprojectionTerms {
       : p_(problem), cam_(cam), opt_(opt), used_(problem.observations.size(), 0) {}
 
   // Adds the blocks and residuals; an observation is used if all its data is finite and the
-  // point is in front of the camera at the initial state.
+  // point is in front of the camera at the initial state. A keyframe gets its block with its
+  // first used observation (the dynamic terms use these blocks, and skip keyframes without).
   void add_to(ProblemBuilder& b) {
     kf_block_.assign(p_.keyframes.size(), -1);
     pt_block_.assign(p_.points.size(), -1);
@@ -93,8 +72,6 @@ class StaticReprojectionTerms {
       kf_ok[k] = T.allFinite() && geometry::is_rigid_transform(T, 1e-3);
     }
     for (size_t j = 0; j < p_.points.size(); ++j) pt_ok[j] = p_.points[j].X_w.allFinite();
-    // every block in one buffer, in the order added: bit-identical results (reserve())
-    b.reserve(static_cast<int>(detail::kPoseSize * p_.keyframes.size() + 3 * p_.points.size()));
 
     for (size_t e = 0; e < p_.observations.size(); ++e) {
       const BAObservation& o = p_.observations[e];
@@ -121,6 +98,7 @@ class StaticReprojectionTerms {
   }
 
   int num_used() const { return num_used_; }
+  const std::vector<int>& keyframe_blocks() const { return kf_block_; }
 
   // Per observation error at the builder's current state (for used observations).
   std::vector<ObservationError> errors(const ProblemBuilder& b) const {
@@ -201,11 +179,13 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
         .count();
   };
   check_indices(problem);
+  detail::check_dynamic_indices(problem);
 
   BundleAdjustmentReport report;
   const size_t E = problem.observations.size();
   report.outlier.assign(E, 1);
   report.num_outliers = static_cast<int>(E);
+  report.dynamic_outlier.assign(problem.dynamic_observations.size(), 1);
   if (!valid_camera(cam)) {
     report.message = "invalid camera";
     report.solve_ms = elapsed_ms();
@@ -213,10 +193,18 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
   }
 
   ProblemBuilder builder;
+  {  // every block in one buffer, in the order added: bit-identical results (reserve())
+    size_t doubles = detail::kPoseSize * problem.keyframes.size() + 3 * problem.points.size();
+    for (const BAObject& o : problem.objects)
+      doubles += detail::kPoseSize * o.poses.size() + 3 * o.points_o.size();
+    builder.reserve(static_cast<int>(doubles));
+  }
   StaticReprojectionTerms stat(problem, cam, opt);
   stat.add_to(builder);
-  // (Later issues: DynamicReprojectionTerms, ConstantVelocityTerms, ... add_to(builder) here.)
+  DynamicReprojectionTerms dyna(problem, cam, opt);
+  dyna.add_to(builder, stat.keyframe_blocks());
   report.num_residuals = stat.num_used();
+  report.num_dynamic_residuals = dyna.num_used();
   if (builder.num_residuals() == 0) {
     report.message = "no valid observations";
     report.solve_ms = elapsed_ms();
@@ -251,6 +239,8 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
     }
   }
   stat.write_back(builder, problem);
+  dyna.write_back(builder, problem);
+  report.dynamic_outlier = dyna.outliers(builder);
 
   const std::vector<ObservationError> final_errors = stat.errors(builder);
   report.final_cost = stat.cost(final_errors);

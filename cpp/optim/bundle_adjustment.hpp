@@ -33,10 +33,38 @@ struct BAObservation {
   double inv_sigma2 = 1;  // 1 / sigma^2 of the keypoint's octave
 };
 
+// e_dyna of eq. 9 (optional): a moving object seen from the window's keyframes. Its pose
+// at each keyframe's time, T_w_o, and its points X_o in the object frame are refined with
+// the keyframes; its keypoints reproject through X_c = T_c_w T_w_o X_o. Consecutive poses
+// are tied by the mechanical link (e_link: (I - Pi) log(T_b T_a^-1) = 0), which is what lets
+// the dynamic points inform the camera: a free object pose would absorb any camera motion.
+struct BAObjectPose {
+  int keyframe = -1;  // index into BAProblem::keyframes: the camera that saw this pose
+  Mat4 T_w_o = Mat4::Identity();
+  bool fixed = false;
+};
+
+struct BAObject {
+  std::vector<BAObjectPose> poses;  // in time order (the link ties poses k and k + 1)
+  std::vector<Vec3> points_o;       // X_o
+  Mat6 Pi = Mat6::Identity();       // the link's projector (geometry/link_projection.hpp)
+};
+
+struct BADynamicObservation {
+  int object = -1;        // index into BAProblem::objects
+  int pose = -1;          // index into that object's poses (its keyframe is the camera)
+  int point = -1;         // index into that object's points_o
+  Vec2 uv = Vec2::Zero(); // left image pixel
+  double u_right = -1;    // right image column; < 0: mono
+  double inv_sigma2 = 1;  // 1 / sigma^2 of the keypoint's octave
+};
+
 struct BAProblem {
   std::vector<BAKeyframe> keyframes;
   std::vector<BAPoint> points;
   std::vector<BAObservation> observations;
+  std::vector<BAObject> objects;                          // e_dyna; empty: static BA
+  std::vector<BADynamicObservation> dynamic_observations;
 };
 
 enum class BALinearSolver {
@@ -59,6 +87,10 @@ struct BundleAdjustmentOptions {
   double min_depth = 0.1;  // m; closer points count as behind the camera
   BALinearSolver linear_solver = BALinearSolver::kAuto;
   double function_tolerance = 1e-6;  // Ceres' relative cost change for convergence
+  // e_link between consecutive object poses: the out-of-link motion allowed (a stiff prior,
+  // as the object window's; no loss: the link is a model, not a measurement)
+  double link_sigma_translation = 0.01;  // m
+  double link_sigma_rotation = 0.002;    // rad
   // Levenberg-Marquardt's first damping is 1 / radius (on the Jacobi-scaled normal
   // equations). Ceres' default 1e4 lets the first steps fling weakly constrained points
   // (far, mono) behind the cameras, and each rejected step costs an iteration.
@@ -76,6 +108,9 @@ struct BundleAdjustmentReport {
   // Per observation: 1 = outlier at the final state (chi2 above threshold, behind a camera,
   // or invalid: non-finite data, inv_sigma2 <= 0, non-finite pose or point).
   std::vector<std::uint8_t> outlier;
+  // The same per dynamic observation (e_dyna); costs and RMS above are the static term's.
+  std::vector<std::uint8_t> dynamic_outlier;
+  int num_dynamic_residuals = 0;  // dynamic observations in the first pass
   int iterations = 0;      // Ceres iterations over both passes
   double solve_ms = 0;     // wall time of the whole call
   bool converged = false;  // a usable solution was computed (false: nothing was changed)
@@ -83,8 +118,9 @@ struct BundleAdjustmentReport {
   std::string message;     // Ceres' termination message or the reason for not solving
 };
 
-// Refines the free keyframe poses and points of `problem` in place.
-// Throws std::invalid_argument if an observation indexes a keyframe or point out of range;
+// Refines the free keyframe poses and points of `problem` in place, and its objects' free
+// poses and points. Throws std::invalid_argument if an observation indexes a keyframe,
+// point, object, object pose or object point out of range;
 // any other bad data (NaN, points behind the camera, no observations) gives outlier flags
 // and, when nothing can be solved, converged = false with the problem unchanged.
 BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoCamera& cam,

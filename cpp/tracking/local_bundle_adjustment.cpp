@@ -1,6 +1,7 @@
 #include "tracking/local_bundle_adjustment.hpp"
 
 #include <algorithm>
+#include <map>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -12,7 +13,7 @@ namespace twistslam::tracking {
 
 bool local_bundle_adjustment(map::Map& map, int keyframe_id, int gauge_keyframe,
                              const geometry::StereoCamera& camera, const LocalBAOptions& options,
-                             const LevelWeights& weights) {
+                             const LevelWeights& weights, ObjectBundleTerms* objects) {
   const int segment = map.keyframe(keyframe_id).segment;
   std::vector<int> window{keyframe_id};
   for (int kf : map.covisible_keyframes(keyframe_id, options.window - 1))
@@ -73,13 +74,22 @@ bool local_bundle_adjustment(map::Map& map, int keyframe_id, int gauge_keyframe,
     }
   }
 
+  if (objects) {
+    std::map<int, int> slot_of_frame;
+    for (const auto& [kf, slot] : kf_slot) slot_of_frame[map.keyframe(kf).frame_index] = slot;
+    objects->add_bundle_terms(slot_of_frame, options.dynamic_points_per_object, &problem);
+  }
+
   optim::BundleAdjustmentOptions ba;
   ba.max_iterations_first = options.iterations_first;
   ba.max_iterations_second = options.iterations_second;
   ba.huber_delta_stereo = options.huber_stereo;
   ba.huber_delta_mono = options.huber_mono;
   ba.num_threads = options.num_threads;
+  ba.link_sigma_translation = options.dynamic_link_sigma_translation;
+  ba.link_sigma_rotation = options.dynamic_link_sigma_rotation;
   const optim::BundleAdjustmentReport report = optim::bundle_adjust(problem, camera, ba);
+  if (objects && report.converged) objects->take_bundle_result(problem, report);
 
   for (const auto& [kf, slot] : kf_slot)
     if (!problem.keyframes[slot].fixed) map.keyframe(kf).T_c_w = problem.keyframes[slot].T_c_w;

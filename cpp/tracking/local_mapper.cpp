@@ -59,7 +59,7 @@ bool LocalMapper::need_keyframe(const Frame& frame, const map::Map& map, int ref
   return temporal || spatial || structure;
 }
 
-KeyframeInsertion LocalMapper::insert_keyframe(Frame& frame, map::Map& map) {
+KeyframeInsertion LocalMapper::insert_keyframe(Frame& frame, map::Map& map, ObjectBundleTerms* objects) {
   map::KeyFrame kf;
   kf.frame_index = frame.index;
   kf.timestamp = frame.timestamp;
@@ -85,7 +85,7 @@ KeyframeInsertion LocalMapper::insert_keyframe(Frame& frame, map::Map& map) {
   cull_recent_points(map, id);
   const auto ba_start = std::chrono::steady_clock::now();
   insertion.bundle_adjusted =
-      local_bundle_adjustment(map, id, segment_first_keyframe_, camera_, ba_options_, weights_);
+      local_bundle_adjustment(map, id, segment_first_keyframe_, camera_, ba_options_, weights_, objects);
   if (insertion.bundle_adjusted)
     insertion.ba_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - ba_start).count();
   bound_map_size(map);

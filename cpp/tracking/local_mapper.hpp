@@ -10,6 +10,7 @@
 #include "map/map.hpp"
 #include "tracking/frame.hpp"
 #include "tracking/level_weights.hpp"
+#include "tracking/object_bundle_terms.hpp"
 #include "tracking/options.hpp"
 
 namespace twistslam::tracking {
@@ -36,8 +37,9 @@ class LocalMapper {
   bool need_keyframe(const Frame& frame, const map::Map& map, int reference_keyframe) const;
   // Adds frame as a keyframe of the current segment: its inlier matches become observations
   // (outliers are unmatched), its other stereo keypoints new points (frame.point_ids gets
-  // them, so the next frame tracks them); then culling, local BA and the map bound.
-  KeyframeInsertion insert_keyframe(Frame& frame, map::Map& map);
+  // them, so the next frame tracks them); then culling, local BA (with the moving objects'
+  // terms when `objects` is given) and the map bound.
+  KeyframeInsertion insert_keyframe(Frame& frame, map::Map& map, ObjectBundleTerms* objects = nullptr);
 
   void reset();
 

@@ -28,6 +28,7 @@
 #include "objects/twist_estimation.hpp"
 #include "tracking/frame.hpp"
 #include "tracking/level_weights.hpp"
+#include "tracking/object_bundle_terms.hpp"
 #include "tracking/object_tracking_options.hpp"
 
 namespace twistslam::tracking {
@@ -39,7 +40,7 @@ struct ObjectTrackingReport {
   int num_points = 0;   // matched inlier points over all clusters
 };
 
-class ObjectTracker {
+class ObjectTracker : public ObjectBundleTerms {
  public:
   ObjectTracker(const geometry::StereoCamera& camera, const ObjectTrackingOptions& options,
                 const std::vector<float>& scale_factors, LevelWeights weights);
@@ -51,6 +52,16 @@ class ObjectTracker {
   // frame (planar link). Throws std::invalid_argument on wrong sizes or types.
   ObjectTrackingReport track(const Frame& frame, const cv::Mat& instances, const cv::Mat& flow,
                              const Vec3& up_w);
+
+  // The frame just tracked becomes a keyframe: its object observations are kept for the
+  // local BA (e_dyna), the latest max_keyframes per point.
+  void mark_keyframe(int frame_index, int max_keyframes);
+  // ObjectBundleTerms (object_bundle.cpp): the live clusters' poses at the problem's
+  // keyframes, their points seen from two of them, and the results taken back.
+  void add_bundle_terms(const std::map<int, int>& slot_of_frame, int max_points,
+                        optim::BAProblem* problem) override;
+  void take_bundle_result(const optim::BAProblem& problem,
+                          const optim::BundleAdjustmentReport& report) override;
 
   const std::vector<objects::ObjectTrack>& tracks() const { return tracks_; }
   const std::vector<objects::ObjectCluster>& clusters() const { return clusters_; }
@@ -117,6 +128,17 @@ class ObjectTracker {
   std::vector<int> claimed_by_;  // cluster index or -1
   std::unordered_set<int> assigned_instances_;  // instances associated with a cluster
   std::map<int, int> instance_class_;           // instance -> majority class of its keypoints
+  // what add_bundle_terms put into the BA problem, for take_bundle_result
+  struct BundleLink {
+    int cluster = -1;
+    int object = -1;                  // index into the problem's objects
+    std::vector<int> rows;            // track row per object pose
+  };
+  std::vector<BundleLink> bundle_links_;
+  struct BundleObservation {
+    int cluster, point, frame;
+  };
+  std::vector<BundleObservation> bundle_observations_;  // per dynamic observation of the problem
 };
 
 }  // namespace twistslam::tracking

@@ -105,14 +105,24 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
       result.status = Status::kLost;
     }
   }
-  // 3. Local mapping: a keyframe when the tracked frame needs one.
+  // 3. Objects: every cluster tracked against the camera pose just found (eq. 4), before
+  // local mapping so that a keyframe's BA sees this frame's object observations (e_dyna).
+  const bool track_objects = tracked && (!instances.empty() || !object_tracker_.tracks().empty());
+  if (track_objects) {
+    result.objects = object_tracker_.track(frame, instances, flow, road_up_w_);
+    if (result.is_keyframe) object_tracker_.mark_keyframe(frame.index, options_.local_ba.window);
+    timer.lap("objects");
+  }
+  // 4. Local mapping: a keyframe when the tracked frame needs one.
   if (tracked) {
     // the velocity of two consecutive tracked frames of one segment, before any BA refines it
     if (state_ == State::kTracking && !result.is_keyframe) camera_tracker_.update_velocity(frame);
     state_ = State::kTracking;
     KeyframeInsertion insertion;
     if (!result.is_keyframe && local_mapper_.need_keyframe(frame, map_, reference_keyframe_)) {
-      insertion = local_mapper_.insert_keyframe(frame, map_);
+      const bool dynamic = track_objects && options_.local_ba.dynamic_objects;
+      if (dynamic) object_tracker_.mark_keyframe(frame.index, options_.local_ba.window);
+      insertion = local_mapper_.insert_keyframe(frame, map_, dynamic ? &object_tracker_ : nullptr);
       reference_keyframe_ = insertion.keyframe_id;
       result.is_keyframe = true;
     }
@@ -128,11 +138,6 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
   if (tracked && result.is_keyframe && !labels.empty() && options_.visual_objects.road_class_id >= 0) {
     add_road_points(frame);
     timer.lap("road_plane");
-  }
-  // 4. Objects: every cluster tracked against the camera pose just found (eq. 4).
-  if (tracked && (!instances.empty() || !object_tracker_.tracks().empty())) {
-    result.objects = object_tracker_.track(frame, instances, flow, road_up_w_);
-    timer.lap("objects");
   }
 
   record_trajectory(frame, result.status);

@@ -148,3 +148,22 @@ def test_rows_reseeded_from_the_instance_are_reported_and_predicted_ones_are_not
     del poses[3]
     (obj,) = visual_objects([cluster], sequence=None, camera_poses=poses).reported()
     np.testing.assert_array_equal(obj.frames, [0, 1])
+
+
+def test_dynamic_points_in_the_keyframe_ba_keep_the_camera_as_accurate(sim, result):
+    from twistslam.datasets import read_poses
+    from twistslam.eval.trajectory import invert
+
+    dyn = twistslam.run(KittiTracking(sim, "0000"), {"local_ba": {"dynamic_objects": True}},
+                        progress=False, segmentation="files", flow="files")
+    gt = read_poses(sim / "training" / "poses" / "0000.txt")
+
+    def drift(poses):  # camera position error per frame, relative to frame 0
+        est = invert(poses[0])[None] @ poses
+        ref = invert(gt[0])[None] @ gt[: len(poses)]
+        return np.linalg.norm(est[:, :3, 3] - ref[:, :3, 3], axis=1).max()
+
+    # measured: 0.0116 m with, 0.0115 m without over these 15 frames
+    assert np.isfinite(dyn.camera_poses).all()
+    assert drift(dyn.camera_poses) < max(1.3 * drift(result.camera_poses), 0.05)
+    assert len(dyn.objects.reported()) >= 2
