@@ -1,5 +1,6 @@
 #include "features/stereo.hpp"
 
+#include "features/disparity_window.hpp"
 #include "features/sad.hpp"
 
 #include <opencv2/core/utility.hpp>
@@ -93,17 +94,11 @@ StereoMatches match_stereo(const Keypoints& left, const Keypoints& right,
     throw std::invalid_argument("match_stereo: keypoint octaves exceed the image's pyramid");
   const cv::Size size0 = gray_left.size();
 
-  // Disparities as measured in the images: the pair's offset (stereo_camera.hpp) is added only
-  // when a disparity becomes a depth, so the search windows are in image pixels.
-  const double fb = camera.fx * camera.baseline;
+  const DisparityWindow window = disparity_window(camera, options.min_depth, options.max_depth);
+  const double fb = camera.fx * camera.baseline;  // depth = fb / (disparity + offset)
   const float offset = static_cast<float>(camera.disparity_offset);
-  const float min_disparity = static_cast<float>(fb / options.max_depth) - offset;
-  const float max_disparity = static_cast<float>(fb / options.min_depth) - offset;
-  // v_right - v_left of a point at disparity d is (fy / fx) (t_right.y - t_left.y) / b * d
-  // (exact for fronto-parallel offsets; the z offsets of KITTI's cameras are negligible):
-  // on KITTI 0.005 d, i.e. 0.25 px at 8 m and 2 px at 1 m.
-  const float dv_per_disparity = static_cast<float>(
-      camera.fy / camera.fx * (camera.t_right.y() - camera.t_left.y()) / camera.baseline);
+  const float min_disparity = window.min_disparity, max_disparity = window.max_disparity;
+  const float dv_per_disparity = window.dv_per_disparity;
   const float dv_max = dv_per_disparity *
                        std::min(max_disparity, static_cast<float>(size0.width));
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "features/disparity_window.hpp"
 #include "features/sad.hpp"
 
 namespace twistslam::features {
@@ -43,13 +44,11 @@ int search_stereo(const Keypoints& left, const std::vector<cv::Mat>& pyramid_lef
       throw std::invalid_argument("search_stereo: keypoint octave exceeds the pyramids");
   }
   const cv::Size size0 = pyramid_left[0].size();
-  const double fb = camera.fx * camera.baseline;
+  const DisparityWindow window = disparity_window(camera, options.min_depth, options.max_depth);
+  const double fb = camera.fx * camera.baseline;  // depth = fb / (disparity + offset)
   const float offset = static_cast<float>(camera.disparity_offset);
-  const float min_disparity = static_cast<float>(fb / options.max_depth) - offset;
-  const float max_disparity = static_cast<float>(fb / options.min_depth) - offset;
-  // the right row of a point drifts with its disparity on KITTI (see match_stereo)
-  const float dv_per_disparity = static_cast<float>(
-      camera.fy / camera.fx * (camera.t_right.y() - camera.t_left.y()) / camera.baseline);
+  const float min_disparity = window.min_disparity, max_disparity = window.max_disparity;
+  const float dv_per_disparity = window.dv_per_disparity;  // the right row drifts (KITTI)
   // sub-pixel refinement around the scan's integer minimum: +-2 level px
   constexpr int kRefineRange = 2;
 

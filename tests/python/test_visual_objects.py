@@ -163,7 +163,10 @@ def test_dynamic_points_in_the_keyframe_ba_keep_the_camera_as_accurate(sim, resu
         ref = invert(gt[0])[None] @ gt[: len(poses)]
         return np.linalg.norm(est[:, :3, 3] - ref[:, :3, 3], axis=1).max()
 
-    # measured: 0.0116 m with, 0.0115 m without over these 15 frames
+    # the keyframe BA did see the objects: runs are bit-for-bit reproducible (one Ceres
+    # thread), so a run whose dynamic terms were never added would give the same cameras
     assert np.isfinite(dyn.camera_poses).all()
-    assert drift(dyn.camera_poses) < max(1.3 * drift(result.camera_poses), 0.05)
+    assert not np.array_equal(dyn.camera_poses, result.camera_poses)
+    # measured: 0.0116 m with, 0.0115 m without over these 15 frames
+    assert drift(dyn.camera_poses) < 1.3 * drift(result.camera_poses)
     assert len(dyn.objects.reported()) >= 2
