@@ -48,7 +48,9 @@ import twistslam
 from twistslam.datasets import read_poses
 from twistslam.demo import MOVABLE_CLASSES, cached_sequence
 from twistslam.eval import evaluate_camera
-from twistslam.eval.object_tracks import MAX_OCCLUSION, evaluate_object_tracks, load_ground_truth
+from twistslam.eval.object_tracks import (
+    MAX_OCCLUSION, MAX_TRUNCATION, evaluate_object_tracks, load_ground_truth,
+)
 from twistslam.objects.result import TrackedObject
 from twistslam.objects.visual import VisualObjects
 from twistslam.timings import Timings
@@ -216,6 +218,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-occlusion", type=int, default=MAX_OCCLUSION, choices=[0, 1, 2],
                         help="evaluate car frames up to this KITTI occlusion level "
                              f"(default {MAX_OCCLUSION}, moderate; 2: every occlusion)")
+    parser.add_argument("--max-truncation", type=int, default=MAX_TRUNCATION, choices=[0, 1, 2],
+                        help="evaluate car frames up to this truncation level (default "
+                             f"{MAX_TRUNCATION}: half of the box in the image; 2: every frame)")
     args = parser.parse_args(argv)
 
     print(f"RPE_t m/m, RPE_r deg/m, ATE_al m (means over moving cars); camera ATE m, RPE m and "
@@ -241,7 +246,8 @@ def main(argv: list[str] | None = None) -> int:
                 if args.gt_as_estimate:  # the config does not matter here
                     result = gt_as_estimate(gt, np.random.default_rng(seed))
                 ev = evaluate_object_tracks(result.objects.reported(), result.camera_poses, gt,
-                                            max_occlusion=args.max_occlusion)
+                                            max_occlusion=args.max_occlusion,
+                                            max_truncation=args.max_truncation)
                 cam = evaluate_camera(gt_cam, result.camera_poses)
                 print(format_row(label, name, ev, cam, result), flush=True)
                 if args.per_car:

@@ -25,24 +25,37 @@ void check_options(const StereoSearchOptions& o) {
     fail("patch_half_height must be in [0, 15]");
 }
 
+namespace {
+
+void check_arguments(const char* who, const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
+                     const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
+                     const StereoSearchOptions& options, const std::vector<int>& which,
+                     const StereoMatches& matches) {
+  check_options(options);
+  auto fail = [who](const std::string& what) {
+    throw std::invalid_argument(std::string(who) + ": " + what);
+  };
+  const int N = static_cast<int>(left.size());
+  if (static_cast<int>(matches.u_right.size()) != N || static_cast<int>(matches.depth.size()) != N)
+    fail("matches must have one entry per left keypoint");
+  if (pyramid_left.empty() || pyramid_right.empty() || pyramid_left[0].size() != pyramid_right[0].size())
+    fail("left and right pyramids missing or of different sizes");
+  if (!(camera.baseline > 0) || !(camera.fx > 0)) fail("the camera needs fx > 0 and a positive baseline");
+  for (int i : which) {
+    if (i < 0 || i >= N) fail("keypoint index out of range");
+    const int o = left.keypoints[i].octave;
+    if (o < 0 || o >= static_cast<int>(pyramid_left.size()) || o >= static_cast<int>(pyramid_right.size()))
+      fail("keypoint octave exceeds the pyramids");
+  }
+}
+
+}  // namespace
+
 int search_stereo(const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
                   const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
                   const StereoSearchOptions& options, const std::vector<int>& which,
                   StereoMatches* matches) {
-  check_options(options);
-  const int N = static_cast<int>(left.size());
-  if (static_cast<int>(matches->u_right.size()) != N || static_cast<int>(matches->depth.size()) != N)
-    throw std::invalid_argument("search_stereo: matches must have one entry per left keypoint");
-  if (pyramid_left.empty() || pyramid_right.empty() || pyramid_left[0].size() != pyramid_right[0].size())
-    throw std::invalid_argument("search_stereo: left and right pyramids missing or of different sizes");
-  if (!(camera.baseline > 0) || !(camera.fx > 0))
-    throw std::invalid_argument("search_stereo: the camera needs fx > 0 and a positive baseline");
-  for (int i : which) {
-    if (i < 0 || i >= N) throw std::invalid_argument("search_stereo: keypoint index out of range");
-    const int o = left.keypoints[i].octave;
-    if (o < 0 || o >= static_cast<int>(pyramid_left.size()) || o >= static_cast<int>(pyramid_right.size()))
-      throw std::invalid_argument("search_stereo: keypoint octave exceeds the pyramids");
-  }
+  check_arguments("search_stereo", left, pyramid_left, pyramid_right, camera, options, which, *matches);
   const cv::Size size0 = pyramid_left[0].size();
   const DisparityWindow window = disparity_window(camera, options.min_depth, options.max_depth);
   const double fb = camera.fx * camera.baseline;  // depth = fb / (disparity + offset)
@@ -86,6 +99,48 @@ int search_stereo(const Keypoints& left, const std::vector<cv::Mat>& pyramid_lef
   };
   cv::parallel_for_(cv::Range(0, static_cast<int>(which.size())), search_range, 2.0);
   return found.load();
+}
+
+int check_left_right(const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
+                     const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
+                     const StereoSearchOptions& options, const std::vector<int>& which,
+                     float tolerance_px, StereoMatches* matches) {
+  check_arguments("check_left_right", left, pyramid_left, pyramid_right, camera, options, which,
+                  *matches);
+  if (!(tolerance_px >= 0)) throw std::invalid_argument("check_left_right: tolerance_px must be >= 0");
+  const cv::Size size0 = pyramid_left[0].size();
+  const DisparityWindow window = disparity_window(camera, options.min_depth, options.max_depth);
+  std::atomic<int> removed{0};
+  auto check_range = [&](const cv::Range& range) {
+    for (int j = range.start; j < range.end; ++j) {
+      const int i = which[j];
+      if (!(matches->depth[i] > 0)) continue;
+      const cv::KeyPoint& kl = left.keypoints[i];
+      const cv::Mat& L = pyramid_left[kl.octave];
+      const cv::Mat& R = pyramid_right[kl.octave];
+      const float scale = static_cast<float>(size0.width) / L.cols;
+      const cv::Point2f pl = image_to_level(kl.pt, size0, L.size());
+      const float xr = image_to_level({matches->u_right[i], kl.pt.y}, size0, R.size()).x;
+      const int xr_int = cvRound(xr), y = cvRound(pl.y);
+      // the right window against the left windows of every disparity of the range (the
+      // matched one and, for an occluder, larger ones: it is nearer)
+      // (a match nearer than min_depth, from another matcher, still finds itself)
+      const int x_first = static_cast<int>(std::floor(xr + window.min_disparity / scale));
+      const int x_last = std::max(static_cast<int>(std::ceil(xr + window.max_disparity / scale)),
+                                  static_cast<int>(std::ceil(pl.x + tolerance_px)) + 2);
+      const SadScan back = scan_sad(R, L, xr_int, y, x_first, x_last, options.patch_radius,
+                                    options.patch_half_height);
+      if (back.best_column < 0) continue;  // window off the image: cannot judge, keep
+      // + 0.5: the scan works on whole columns, the match is sub-pixel
+      if (std::abs(static_cast<float>(back.best_column) - (pl.x + (xr_int - xr))) <= tolerance_px + 0.5f)
+        continue;
+      matches->u_right[i] = -1.0f;
+      matches->depth[i] = -1.0f;
+      ++removed;
+    }
+  };
+  cv::parallel_for_(cv::Range(0, static_cast<int>(which.size())), check_range, 2.0);
+  return removed.load();
 }
 
 }  // namespace twistslam::features

@@ -39,4 +39,16 @@ int search_stereo(const Keypoints& left, const std::vector<cv::Mat>& pyramid_lef
                   const StereoSearchOptions& options, const std::vector<int>& which,
                   StereoMatches* matches);
 
+// Left-right consistency of existing matches: the right window at each match of `which`,
+// scanned along the left row over the disparity range, must find its best match back within
+// tolerance_px (level px) of the left keypoint. A point the right camera does not see (an
+// object in front of it there: the cameras are 0.54 m apart) was matched to the occluder's
+// texture, and the occluder's window finds itself farther right in the left image. Failing
+// matches get u_right = depth = -1; matches whose windows leave the image are kept. Returns
+// how many were removed. Throws std::invalid_argument as search_stereo.
+int check_left_right(const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
+                     const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
+                     const StereoSearchOptions& options, const std::vector<int>& which,
+                     float tolerance_px, StereoMatches* matches);
+
 }  // namespace twistslam::features

@@ -31,10 +31,15 @@ std::vector<std::pair<int, Vec3>> ObjectTracker::free_instance_points(const Fram
   return out;
 }
 
-bool ObjectTracker::seed_points(const Frame& frame, int instance,
+int ObjectTracker::min_seed_points(geometry::LinkType link) const {
+  return link == geometry::LinkType::kPlanar ? options_.min_new_planar_cluster_points
+                                             : options_.min_new_cluster_points;
+}
+
+bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points,
                                 std::vector<std::pair<int, Vec3>>* kept, Vec3* centroid) const {
   const auto fresh = free_instance_points(frame, instance);
-  if (static_cast<int>(fresh.size()) < options_.min_new_cluster_points) return false;
+  if (static_cast<int>(fresh.size()) < min_points) return false;
   std::vector<Vec3> X;
   for (const auto& f : fresh) X.push_back(f.second);
   const Vec3 median = median_point(X);
@@ -42,7 +47,7 @@ bool ObjectTracker::seed_points(const Frame& frame, int instance,
   *centroid = Vec3::Zero();
   for (const auto& f : fresh)
     if ((f.second - median).norm() <= options_.max_point_spread_m) kept->push_back(f), *centroid += f.second;
-  if (static_cast<int>(kept->size()) < options_.min_new_cluster_points) return false;
+  if (static_cast<int>(kept->size()) < min_points) return false;
   *centroid /= static_cast<double>(kept->size());
   return true;
 }
@@ -79,7 +84,7 @@ void ObjectTracker::add_points(int c, const Frame& frame, int instance) {
 bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o) {
   std::vector<std::pair<int, Vec3>> kept;
   Vec3 centroid;
-  if (!seed_points(frame, instance, &kept, &centroid)) return false;
+  if (!seed_points(frame, instance, min_seed_points(tracks_[c].link), &kept, &centroid)) return false;
   objects::ObjectCluster& cluster = clusters_[c];
   // A cluster without a velocity yet (it failed in its second frame) has no prediction worth
   // keeping: its origin moves to the new points' centroid, as a new cluster's would, and its
@@ -100,13 +105,14 @@ bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o)
 bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id, const Vec3& up_w) {
   std::vector<std::pair<int, Vec3>> kept;
   Vec3 centroid;
-  if (!seed_points(frame, instance, &kept, &centroid)) return false;
+  const bool planar = contains(options_.planar_class_ids, class_id);
+  const geometry::LinkType link = planar ? geometry::LinkType::kPlanar : geometry::LinkType::kFree;
+  if (!seed_points(frame, instance, min_seed_points(link), &kept, &centroid)) return false;
 
   objects::ObjectTrack track;
   track.id = next_id_++;
   track.class_id = class_id;
-  const bool planar = contains(options_.planar_class_ids, class_id);
-  track.link = planar ? geometry::LinkType::kPlanar : geometry::LinkType::kFree;
+  track.link = link;
   track.Pi = planar ? geometry::projector_planar(up_w) : geometry::projector_free();
   track.state = objects::TrackState::kTentative;
   objects::TrackFrame row;

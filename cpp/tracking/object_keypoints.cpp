@@ -74,7 +74,9 @@ cv::Mat object_class_mask(const cv::Mat& instances, const cv::Mat& labels,
 
 ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& main,
                                                  const ObjectTrackingOptions& options)
-    : extractor_(mask_orb_options(main, options)), min_spacing_px_(options.extra_min_spacing_px) {
+    : extractor_(mask_orb_options(main, options)), min_spacing_px_(options.extra_min_spacing_px),
+      left_right_check_(options.left_right_check),
+      left_right_tolerance_px_(static_cast<float>(options.left_right_tolerance_px)) {
   search_.min_depth = static_cast<float>(options.extra_min_depth_m);
   search_.max_depth = static_cast<float>(options.max_depth_m);
   search_.max_cost = static_cast<float>(options.extra_max_sad_cost);
@@ -114,21 +116,26 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
   f->matches.u_right.resize(left.size(), -1.0f);
   f->matches.depth.resize(left.size(), -1.0f);
 
-  // every object keypoint without depth: the new ones and the main pass's unmatched ones
-  std::vector<int> which;
+  // every object keypoint: the new ones and the main pass's
+  std::vector<int> on_objects, without_depth;
   for (int i = 0; i < static_cast<int>(left.size()); ++i) {
-    if (f->matches.depth[i] > 0) continue;
     // std::lround as FrameBuilder and ObjectTracker read a keypoint's pixel (cvRound rounds half to even)
     const cv::Point p(static_cast<int>(std::lround(left.keypoints[i].pt.x)), static_cast<int>(std::lround(left.keypoints[i].pt.y)));
     if (p.x < 0 || p.y < 0 || p.x >= object_mask.cols || p.y >= object_mask.rows) continue;
-    if (object_mask.at<std::uint8_t>(p.y, p.x)) which.push_back(i);
+    if (!object_mask.at<std::uint8_t>(p.y, p.x)) continue;
+    on_objects.push_back(i);
+    if (!(f->matches.depth[i] > 0)) without_depth.push_back(i);
   }
-  if (which.empty()) return report;
+  if (on_objects.empty()) return report;
   const std::vector<cv::Mat>& pyr_left = left.pyramid.empty() ? extra.pyramid : left.pyramid;
   if (f->right.pyramid.empty())
     throw std::invalid_argument("ObjectKeypointExtractor: the right pyramid was not kept");
-  report.num_new_depth =
-      features::search_stereo(left, pyr_left, f->right.pyramid, camera, search_, which, &f->matches);
+  report.num_new_depth = features::search_stereo(left, pyr_left, f->right.pyramid, camera, search_,
+                                                 without_depth, &f->matches);
+  if (left_right_check_)
+    report.num_left_right_removed =
+        features::check_left_right(left, pyr_left, f->right.pyramid, camera, search_, on_objects,
+                                   left_right_tolerance_px_, &f->matches);
   return report;
 }
 

@@ -20,6 +20,7 @@ namespace twistslam::tracking {
 struct ObjectKeypointReport {
   int num_added = 0;      // new keypoints appended to the left keypoints
   int num_new_depth = 0;  // object keypoints (new or old) that the SAD scan gave a depth
+  int num_left_right_removed = 0;  // object keypoints whose depth failed the left-right check
 };
 
 // CV_8UC1 mask, 255 on pixels of an instance (instances > 0) whose class (labels; any class
@@ -34,8 +35,9 @@ class ObjectKeypointExtractor {
 
   // Appends to features->left (keypoints, descriptors) and features->matches the object
   // keypoints farther than min spacing from every existing left keypoint, then searches the
-  // depth of every object keypoint that has none. Needs the left and right pyramids of
-  // extract_and_match. Keypoints at index >= the old size are the new ones.
+  // depth of every object keypoint that has none; with the left-right check, every object
+  // keypoint's depth is then checked back from the right image. Needs the left and right
+  // pyramids of extract_and_match. Keypoints at index >= the old size are the new ones.
   ObjectKeypointReport extract(const cv::Mat& gray_left, const cv::Mat& object_mask,
                                const geometry::StereoCamera& camera,
                                features::StereoFeatures* features) const;
@@ -44,6 +46,8 @@ class ObjectKeypointExtractor {
   features::OrbExtractor extractor_;
   features::StereoSearchOptions search_;
   double min_spacing_px_;
+  bool left_right_check_;
+  float left_right_tolerance_px_;
 };
 
 }  // namespace twistslam::tracking

@@ -92,9 +92,12 @@ class ObjectTracker : public ObjectBundleTerms {
   // Stereo keypoints of `instance` no cluster claimed, in the world frame.
   std::vector<std::pair<int, Vec3>> free_instance_points(const Frame& frame, int instance) const;
   // The free stereo points of `instance` within max_point_spread_m of their median, and
-  // their centroid (world frame); false with fewer than min_new_cluster_points.
-  bool seed_points(const Frame& frame, int instance, std::vector<std::pair<int, Vec3>>* kept,
-                   Vec3* centroid) const;
+  // their centroid (world frame); false with fewer than min_points.
+  bool seed_points(const Frame& frame, int instance, int min_points,
+                   std::vector<std::pair<int, Vec3>>* kept, Vec3* centroid) const;
+  // Stereo points a new (or re-seeded) cluster of this link needs: the planar link's
+  // 3-DoF twist is fixed by fewer points than a free 6-DoF one.
+  int min_seed_points(geometry::LinkType link) const;
   // A new point of cluster c (index into clusters_) from keypoint k at X_o; claims k.
   void append_point(objects::ObjectCluster& cluster, int c, const Frame& frame, int k,
                     const Vec3& X_o);

@@ -22,7 +22,8 @@ struct ObjectTrackingOptions {
   double refine_radius_px = 3;      // ... of the second pass, around the estimated pose
   int max_hamming = 50;             // bits
   int flow_max_hamming = 80;        // bits, for keypoints searched around the flow prediction
-  int min_new_cluster_points = 10;  // stereo keypoints inside a new instance mask
+  int min_new_cluster_points = 10;  // stereo keypoints inside a new instance mask (free link)
+  int min_new_planar_cluster_points = 6;  // ... of a planar-link class (3-DoF twist)
   int min_shared_points = 5;        // matched points an instance must share with a cluster
   double min_mask_overlap = 0.5;    // fraction of projected cluster points inside the mask
   int min_inliers = 6;              // inliers of the twist LM for a tracked frame
@@ -50,6 +51,9 @@ struct ObjectTrackingOptions {
   double extra_min_depth_m = 1.5;     // SAD scan: closest depth searched
   double extra_max_sad_cost = 0.7;    // SAD scan: normalised cost accepted
   double extra_sad_uniqueness = 0.7;  // SAD scan: best / second-best minimum
+  // left-right check of every object keypoint's stereo match (features::check_left_right)
+  bool left_right_check = true;
+  double left_right_tolerance_px = 2.0;  // level px between the match and its way back
 };
 
 template <typename Visit>
@@ -65,6 +69,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("max_hamming", o.max_hamming, 0, 256);  // bits of a 256-bit descriptor
   visit("flow_max_hamming", o.flow_max_hamming, 0, 256);
   visit("min_new_cluster_points", o.min_new_cluster_points, 3, 100000);
+  visit("min_new_planar_cluster_points", o.min_new_planar_cluster_points, 3, 100000);
   visit("min_shared_points", o.min_shared_points, 1, 100000);
   visit("min_mask_overlap", o.min_mask_overlap, 0.0, 1.0);
   visit("min_inliers", o.min_inliers, 3, 100000);  // 3 points fix a rigid motion
@@ -91,6 +96,8 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("extra_min_depth_m", o.extra_min_depth_m, 0.1, 1000.0);
   visit("extra_max_sad_cost", o.extra_max_sad_cost, 1e-3, 10.0);
   visit("extra_sad_uniqueness", o.extra_sad_uniqueness, 0.01, 1.0);
+  visit("left_right_check", o.left_right_check, 0, 1);
+  visit("left_right_tolerance_px", o.left_right_tolerance_px, 0.0, 100.0);
 }
 
 }  // namespace twistslam::tracking

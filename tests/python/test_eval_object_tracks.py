@@ -6,7 +6,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from twistslam.eval.object_tracks import (
-    MAX_OCCLUSION, MAX_RANGE_M, MIN_BOX_HEIGHT_PX, MIN_VISIBLE_FRAMES, GtTrack, SequenceGroundTruth,
+    MAX_OCCLUSION, MAX_RANGE_M, MAX_TRUNCATION, MIN_BOX_HEIGHT_PX, MIN_VISIBLE_FRAMES, GtTrack, SequenceGroundTruth,
     estimate_offset, evaluate_object_tracks, evaluated_cars, load_ground_truth, selected_frames,
 )
 from twistslam.objects.result import TrackedObject
@@ -259,6 +259,31 @@ def test_frames_hidden_beyond_the_moderate_occlusion_level_are_not_evaluated(wor
     assert 1 not in evaluated_cars(gt) and 1 in evaluated_cars(gt, max_occlusion=2)
 
 
+def test_frames_mostly_outside_the_image_are_not_evaluated(world):
+    gt, A, cams = world
+    assert MAX_TRUNCATION == 1  # at least half of the projected box inside the image
+    car = gt.tracks[1]
+    rng = np.random.default_rng(12)
+    car.truncation = rng.integers(0, 3, FRAMES)
+    inside = car.frames[car.truncation <= 1]
+    assert len(inside) < FRAMES and len(inside) >= MIN_VISIBLE_FRAMES
+    np.testing.assert_array_equal(selected_frames(car, gt.T_w_c), inside)
+    np.testing.assert_array_equal(selected_frames(car, gt.T_w_c, max_truncation=2), car.frames)
+    np.testing.assert_array_equal(selected_frames(car, gt.T_w_c, max_truncation=0),
+                                  car.frames[car.truncation == 0])
+    # the two rules combine: a frame must pass both
+    car.occlusion = rng.integers(0, 3, FRAMES)
+    both = car.frames[(car.truncation <= 1) & (car.occlusion <= 1)]
+    np.testing.assert_array_equal(selected_frames(car, gt.T_w_c), both)
+    est = [estimate_of(gt, A, 1, OFFSET, rng, frames=both)]
+    row = evaluate_object_tracks(est, cams, gt, max_occlusion=2, max_truncation=2).cars[0]
+    assert row.frames == FRAMES and row.coverage == pytest.approx(len(both) / FRAMES)
+    # beside the camera in all but a few frames: not evaluated
+    car.occlusion = None
+    car.truncation = np.where(car.frames < MIN_VISIBLE_FRAMES - 1, 1, 2)
+    assert 1 not in evaluated_cars(gt) and 1 in evaluated_cars(gt, max_truncation=2)
+
+
 def parse_label_heights(path):
     """``{(track id, frame): bottom - top}`` of a KITTI tracking label file, read directly."""
     heights = {}
@@ -269,17 +294,19 @@ def parse_label_heights(path):
     return heights
 
 
-def parse_label_occlusions(path):
-    """``{(track id, frame): occlusion level}`` of a KITTI tracking label file, read directly."""
-    return {(int(tok[1]), int(tok[0])): int(tok[4])
+def parse_label_levels(path, column):
+    """``{(track id, frame): level}`` of a KITTI tracking label file's column (3: truncation,
+    4: occlusion), read directly."""
+    return {(int(tok[1]), int(tok[0])): int(tok[column])
             for tok in (line.split() for line in path.read_text(encoding="utf-8").splitlines()) if tok}
 
 
 def test_ground_truth_reads_the_box_heights_of_label_02(sim):
     gt = load_ground_truth(sim, "0000")
     heights = parse_label_heights(sim / "training" / "label_02" / "0000.txt")
-    occlusions = parse_label_occlusions(sim / "training" / "label_02" / "0000.txt")
-    assert set(occlusions.values()) <= {0, 1, 2}
+    occlusions = parse_label_levels(sim / "training" / "label_02" / "0000.txt", 4)
+    truncations = parse_label_levels(sim / "training" / "label_02" / "0000.txt", 3)
+    assert set(occlusions.values()) <= {0, 1, 2} and set(truncations.values()) <= {0, 1, 2}
     n_labelled = 0
     for tid, track in gt.tracks.items():
         expected = np.array([heights.get((tid, int(f)), np.nan) for f in track.frames])
@@ -287,6 +314,8 @@ def test_ground_truth_reads_the_box_heights_of_label_02(sim):
         np.testing.assert_array_equal(track.labelled, np.isfinite(expected))
         occlusion = np.array([occlusions.get((tid, int(f)), -1) for f in track.frames])
         np.testing.assert_array_equal(track.occlusion, occlusion)
+        truncation = np.array([truncations.get((tid, int(f)), -1) for f in track.frames])
+        np.testing.assert_array_equal(track.truncation, truncation)
         n_labelled += track.labelled.sum()
     assert n_labelled > 0
     # the simulator labels cars seen through a gap: the rule must drop some labelled frames

@@ -10,7 +10,8 @@ A car's evaluated frames are those where it is labelled, its centre is within
 ``MAX_RANGE_M``, its labelled 2D box is at least ``MIN_BOX_HEIGHT_PX`` tall and its
 occlusion level at most ``MAX_OCCLUSION``: the simulator labels cars hidden behind others
 down to a few pixels, which no camera can track. Height and occlusion are the KITTI object
-benchmark's *moderate* level; truncated frames (a car at the image border) stay evaluated.
+benchmark's *moderate* level; a frame must also show at least half of the car's projected
+box inside the image (truncation level <= ``MAX_TRUNCATION``).
 """
 
 from __future__ import annotations
@@ -46,6 +47,14 @@ MIN_BOX_HEIGHT_PX = DIFFICULTIES["moderate"].min_height
 #: showed the car on under 500 pixels (a 25 px slice of a car queued behind another).
 #: The tracking devkit keeps level 2; ``max_occlusion=2`` restores it.
 MAX_OCCLUSION = DIFFICULTIES["moderate"].max_occlusion
+#: frames whose truncation level is above this are not evaluated. The simulator's level is 1
+#: when the car touches the image border with at least half of its projected 3D box inside,
+#: 2 when over half of it lies outside (a car beside the camera, seen as a sliver at the
+#: border). KITTI is stricter (moderate keeps truncation <= 0.3, the tracking devkit level 0
+#: only); we keep level 1 because a half-visible car at the border is trackable. Measured on
+#: crowded seed 1: car 79, driving beside the camera, was level 2 in 93 of its 100 frames
+#: (its visible part a strip under 40 px tall at the right border). 2 restores every frame.
+MAX_TRUNCATION = 1
 
 
 @dataclass
@@ -60,6 +69,8 @@ class GtTrack:
         frame is not labelled.
     occlusion : (K,) KITTI occlusion level of the label (0 visible .. 2 largely hidden), -1
         where the frame is not labelled; None: level 0 everywhere.
+    truncation : (K,) KITTI tracking truncation level of the label (0 inside the image, 1 at
+        the border, 2 mostly outside), -1 where the frame is not labelled; None: level 0.
     """
 
     track_id: int
@@ -71,6 +82,7 @@ class GtTrack:
     labelled: np.ndarray
     box_height_px: np.ndarray
     occlusion: np.ndarray | None = None
+    truncation: np.ndarray | None = None
 
     def half_extents(self) -> np.ndarray:
         """(3,) half sizes along the object axes x (length), y (height), z (width)."""
@@ -104,8 +116,9 @@ def load_ground_truth(root: str | Path, seq: str) -> SequenceGroundTruth:
     heights = labels.box_2d[:, 3] - labels.box_2d[:, 1]  # image y grows down: bottom - top
     height_of = {(int(t), int(f)): float(h)
                  for t, f, h in zip(labels.track_id.tolist(), labels.frame.tolist(), heights)}
-    occlusion_of = {(int(t), int(f)): int(o) for t, f, o in
-                    zip(labels.track_id.tolist(), labels.frame.tolist(), labels.occlusion.tolist())}
+    key = list(zip(labels.track_id.tolist(), labels.frame.tolist()))
+    occlusion_of = {(int(t), int(f)): int(o) for (t, f), o in zip(key, labels.occlusion.tolist())}
+    truncation_of = {(int(t), int(f)): int(round(v)) for (t, f), v in zip(key, labels.truncation.tolist())}
     shapes = json.loads((base / "meshes" / seq / "shapes.json").read_text(encoding="utf-8"))
     tracks = {}
     for tid, items in rows.items():
@@ -117,37 +130,47 @@ def load_ground_truth(root: str | Path, seq: str) -> SequenceGroundTruth:
             frames=frames, T_w_o=np.stack([T for _, T in items]), size=sizes[tid],
             labelled=np.array([(tid, int(f)) in height_of for f in frames], dtype=bool),
             box_height_px=box_height,
-            occlusion=np.array([occlusion_of.get((tid, int(f)), -1) for f in frames], dtype=np.int64))
+            occlusion=np.array([occlusion_of.get((tid, int(f)), -1) for f in frames], dtype=np.int64),
+            truncation=np.array([truncation_of.get((tid, int(f)), -1) for f in frames], dtype=np.int64))
     return SequenceGroundTruth(T_w_c=read_poses(base / "poses" / f"{seq}.txt"), tracks=tracks)
 
 
 def selected_frames(track: GtTrack, T_w_c: np.ndarray, max_range_m: float = MAX_RANGE_M,
                     min_box_height_px: float = MIN_BOX_HEIGHT_PX,
-                    max_occlusion: int = MAX_OCCLUSION) -> np.ndarray:
+                    max_occlusion: int = MAX_OCCLUSION,
+                    max_truncation: int = MAX_TRUNCATION) -> np.ndarray:
     """Frames where the object is labelled, its centre within ``max_range_m`` of the camera,
-    its labelled box at least ``min_box_height_px`` tall (0: no height rule) and its
-    occlusion level at most ``max_occlusion`` (2: no occlusion rule)."""
+    its labelled box at least ``min_box_height_px`` tall (0: no height rule), its
+    occlusion level at most ``max_occlusion`` (2: no occlusion rule) and its truncation level
+    at most ``max_truncation`` (2: no truncation rule)."""
     T_c_o = invert(T_w_c[track.frames]) @ track.T_w_o
     near = np.linalg.norm(T_c_o[:, :3, 3], axis=1) <= max_range_m
     if min_box_height_px > 0:
         tall = np.asarray(track.box_height_px) >= min_box_height_px  # NaN (unlabelled): False
     else:
         tall = np.ones(len(track.frames), dtype=bool)
-    occlusion = np.zeros(len(track.frames), dtype=np.int64) if track.occlusion is None else track.occlusion
-    seen = np.asarray(occlusion) <= max_occlusion
-    return track.frames[track.labelled & near & tall & seen]
+    seen = _level(track.occlusion, len(track.frames)) <= max_occlusion
+    inside = _level(track.truncation, len(track.frames)) <= max_truncation
+    return track.frames[track.labelled & near & tall & seen & inside]
+
+
+def _level(levels: np.ndarray | None, n: int) -> np.ndarray:
+    """(n,) per-frame label levels, 0 where the track does not give them."""
+    return np.zeros(n, dtype=np.int64) if levels is None else np.asarray(levels)
 
 
 def evaluated_cars(gt: SequenceGroundTruth, min_frames: int = MIN_VISIBLE_FRAMES,
                    max_range_m: float = MAX_RANGE_M,
                    min_box_height_px: float = MIN_BOX_HEIGHT_PX,
-                   max_occlusion: int = MAX_OCCLUSION) -> dict[int, np.ndarray]:
+                   max_occlusion: int = MAX_OCCLUSION,
+                   max_truncation: int = MAX_TRUNCATION) -> dict[int, np.ndarray]:
     """``{track id: selected frames}`` of the moving cars with ``min_frames`` or more
     selected frames (see :func:`selected_frames`)."""
     cars = {}
     for tid, track in sorted(gt.tracks.items()):
         if track.cls == CAR_CLASS and track.moving:
-            frames = selected_frames(track, gt.T_w_c, max_range_m, min_box_height_px, max_occlusion)
+            frames = selected_frames(track, gt.T_w_c, max_range_m, min_box_height_px, max_occlusion,
+                                     max_truncation)
             if len(frames) >= min_frames:
                 cars[tid] = frames
     return cars

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .object_ground_truth import (  # noqa: F401  (re-exported: callers import them from here)
-    CAR_CLASS, MAX_OCCLUSION, MAX_RANGE_M, MIN_BOX_HEIGHT_PX, MIN_VISIBLE_FRAMES, GtTrack,
+    CAR_CLASS, MAX_OCCLUSION, MAX_RANGE_M, MAX_TRUNCATION, MIN_BOX_HEIGHT_PX, MIN_VISIBLE_FRAMES, GtTrack,
     SequenceGroundTruth, evaluated_cars, load_ground_truth, selected_frames,
 )
 from .object_poses import track_pose_errors
@@ -257,7 +257,8 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
                            margin_m: float = HIT_MARGIN_M, min_frames: int = MIN_VISIBLE_FRAMES,
                            max_range_m: float = MAX_RANGE_M,
                            min_box_height_px: float = MIN_BOX_HEIGHT_PX,
-                           max_occlusion: int = MAX_OCCLUSION) -> ObjectTrackEvaluation:
+                           max_occlusion: int = MAX_OCCLUSION,
+                           max_truncation: int = MAX_TRUNCATION) -> ObjectTrackEvaluation:
     """Evaluate estimated object tracks against the simulator's ground truth.
 
     Parameters
@@ -266,10 +267,11 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
         (K,) and ``T_w_o`` (K, 4, 4) in the SLAM world).
     camera_poses : (F, 4, 4) estimated ``T_w_c`` (NaN rows: frames without a pose, skipped).
     gt : :func:`load_ground_truth`'s result.
-    margin_m, min_frames, max_range_m, min_box_height_px, max_occlusion : see
+    margin_m, min_frames, max_range_m, min_box_height_px, max_occlusion, max_truncation : see
         ``HIT_MARGIN_M``, ``MIN_VISIBLE_FRAMES``, ``MAX_RANGE_M``, ``MIN_BOX_HEIGHT_PX`` (0:
-        every labelled frame in range is evaluated, however small its box) and
-        ``MAX_OCCLUSION`` (2: however hidden). Ghosts are judged against every
+        every labelled frame in range is evaluated, however small its box),
+        ``MAX_OCCLUSION`` (2: however hidden) and ``MAX_TRUNCATION`` (2: however far outside
+        the image). Ghosts are judged against every
         ground-truth box, small or not: a track on a hidden car is no ghost.
     """
     camera_poses = np.asarray(camera_poses, dtype=np.float64)
@@ -278,6 +280,7 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
         frames, poses, raw = to_gt_world(obj, camera_poses, gt.T_w_c)
         if len(frames):
             mapped[int(obj.track_id)] = (frames, poses, raw)
-    cars = evaluated_cars(gt, min_frames, max_range_m, min_box_height_px, max_occlusion)
+    cars = evaluated_cars(gt, min_frames, max_range_m, min_box_height_px, max_occlusion,
+                          max_truncation)
     rows = [_car_row(gt, gt.tracks[tid], frames, mapped, margin_m) for tid, frames in cars.items()]
     return ObjectTrackEvaluation(cars=rows, ghost_ids=ghost_tracks(gt, mapped, margin_m))

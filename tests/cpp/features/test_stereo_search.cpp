@@ -331,4 +331,64 @@ TEST(SearchStereo, BadInputThrows) {
   EXPECT_THROW(check_options(bad[0]), std::invalid_argument);
 }
 
+// Left keypoints whose ray hits the 45 m background just left of the 8 m plane: the right
+// camera, 0.54 m to the right, sees the 8 m plane there (it shifts ~48 px, the background
+// ~9 px), so a scan matches them to whatever fits and the true match does not exist.
+TEST(CheckLeftRight, DropsMatchesTheRightCameraCannotSeeAndKeepsGoodOnes) {
+  const SearchScene& s = search_scene();
+  std::vector<int> which;
+  for (int i = 0; i < static_cast<int>(s.keypoints.size()); ++i)
+    if (s.keypoints.keypoints[i].octave <= 1) which.push_back(i);
+  StereoMatches m = unmatched(s.keypoints.size());
+  // a loose scan, so that the occluded keypoints get (wrong) matches to check
+  StereoSearchOptions loose;
+  loose.max_cost = 1.5f;
+  loose.uniqueness = 1.0f;
+  search_stereo(s.keypoints, s.pyramid_left, s.pyramid_right, s.cam, loose, which, &m);
+  const StereoMatches before = m;
+  std::vector<int> good, wrong;
+  for (int i : which) {
+    if (!(m.depth[i] > 0)) continue;
+    const cv::KeyPoint& k = s.keypoints.keypoints[i];
+    const test::Hit h = test::cast_ray(s.planes, s.cam, s.cam.t_left, k.pt.x, k.pt.y);
+    if (h.plane < 0 || h.plane == kUniformPlane) continue;
+    const double depth = (h.X_c + s.cam.t_left).z();
+    const double error = std::abs(m.depth[i] - depth) / depth;
+    if (s.truth(k).plane >= 0 && error < 0.01) good.push_back(i);
+    else if (error > 0.2) wrong.push_back(i);
+  }
+  const int removed = check_left_right(s.keypoints, s.pyramid_left, s.pyramid_right, s.cam,
+                                       StereoSearchOptions{}, which, 1.0f, &m);
+  int good_kept = 0, wrong_removed = 0, total_removed = 0;
+  for (int i : good) good_kept += m.depth[i] > 0;
+  for (int i : wrong) wrong_removed += !(m.depth[i] > 0);
+  for (int i : which) {
+    if (m.depth[i] > 0) {  // a kept match is untouched
+      EXPECT_EQ(m.depth[i], before.depth[i]);
+      EXPECT_EQ(m.u_right[i], before.u_right[i]);
+    } else if (before.depth[i] > 0) {
+      ++total_removed;
+      EXPECT_EQ(m.u_right[i], -1.0f);
+    }
+  }
+  std::cout << "[ left-right ] good " << good.size() << " kept " << good_kept << "; wrong "
+            << wrong.size() << " removed " << wrong_removed << "\n";
+  EXPECT_EQ(removed, total_removed);
+  ASSERT_GT(good.size(), 300u);
+  ASSERT_GT(wrong.size(), 10u);
+  EXPECT_GE(good_kept, 0.97 * good.size());
+  EXPECT_GE(wrong_removed, 0.6 * wrong.size());
+  // bad input: as search_stereo, and a negative tolerance
+  EXPECT_THROW(check_left_right(s.keypoints, s.pyramid_left, s.pyramid_right, s.cam,
+                                StereoSearchOptions{}, which, -1.0f, &m),
+               std::invalid_argument);
+  StereoMatches short_matches = unmatched(s.keypoints.size() - 1);
+  EXPECT_THROW(check_left_right(s.keypoints, s.pyramid_left, s.pyramid_right, s.cam,
+                                StereoSearchOptions{}, which, 1.0f, &short_matches),
+               std::invalid_argument);
+  EXPECT_THROW(check_left_right(s.keypoints, s.pyramid_left, s.pyramid_right, s.cam,
+                                StereoSearchOptions{}, {static_cast<int>(s.keypoints.size())}, 1.0f, &m),
+               std::invalid_argument);
+}
+
 }  // namespace

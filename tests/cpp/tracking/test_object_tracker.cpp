@@ -359,6 +359,33 @@ TEST_F(TrackerScene, RoadInstanceNeverStartsACluster) {
   }
 }
 
+TEST_F(TrackerScene, PlanarClassStartsAClusterFromFewerPointsThanAFreeOne) {
+  // 8 stereo points under one instance: between the planar minimum (6) and the free one (10)
+  constexpr int kPerson = 24;  // an object class outside planar_class_ids: free link
+  const tracking::ObjectTrackingOptions options;
+  ASSERT_LT(options.min_new_planar_cluster_points, 8);
+  ASSERT_GT(options.min_new_cluster_points, 8);
+  for (int label : {kCar, kPerson}) {
+    Car few = make_car(rng, Vec3(2, 0.8, 25), Vec3::Zero(), 0.0, 8);
+    few.label = label;
+    auto tracker = make_tracker(options);
+    SceneFrame f(0);
+    f.add_car(few, 0, 5);
+    f.add_background(background);
+    ASSERT_EQ(f.frame.keypoints.size(), background.X_w.size() + 8);
+    const auto report = tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+    EXPECT_EQ(report.num_new, label == kCar ? 1 : 0) << "class " << label;
+  }
+  // the planar minimum is the one that counts: raised above 8, the car starts nothing
+  tracking::ObjectTrackingOptions strict = options;
+  strict.min_new_planar_cluster_points = 9;
+  auto tracker = make_tracker(strict);
+  SceneFrame f(0);
+  f.add_car(make_car(rng, Vec3(2, 0.8, 25), Vec3::Zero(), 0.0, 8), 0, 5);
+  f.add_background(background);
+  EXPECT_EQ(tracker.track(f.finish(), f.instances, cv::Mat(), kUp).num_new, 0);
+}
+
 TEST_F(TrackerScene, BadInstanceOrFlowImagesThrow) {
   auto tracker = make_tracker();
   SceneFrame f(0);
