@@ -170,7 +170,16 @@ void ObjectTracker::refine_window(int c) {
   wo.const_sigma_translation = options_.const_sigma_translation;
   wo.const_sigma_rotation = options_.const_sigma_rotation;
   wo.max_iterations = options_.window_iterations;
+  const std::vector<Mat4> before = w.T_w_o;
   if (!optim::refine_visual_object_window(camera_, w, track.Pi, wo).usable) return;
+  // an under-constrained window (few points, no e_const) can throw poses kilometres away
+  for (int r = 0; r < rows; ++r) {
+    if ((w.T_w_o[r].topRightCorner<3, 1>() - before[r].topRightCorner<3, 1>()).norm() > options_.max_step_m)
+      return;
+    if (r > 0 && (w.T_w_o[r].topRightCorner<3, 1>() - w.T_w_o[r - 1].topRightCorner<3, 1>()).norm() >
+                     options_.max_step_m)
+      return;
+  }
   for (int r = 1; r < rows; ++r) track.frames[first + r].T_w_o = w.T_w_o[r];
   for (int r = 0; r + 1 < rows; ++r)  // eq. 2: the twist linking consecutive poses
     track.frames[first + r].xi = track.Pi * geometry::twist_between(w.T_w_o[r], w.T_w_o[r + 1]);

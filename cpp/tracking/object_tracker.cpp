@@ -190,7 +190,9 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
   refine_matches(cluster, frame.T_c_w * T_w_o_first, frame, instance, &matches);
   if (matches.size() > before && static_cast<int>(matches.size()) >= options_.min_inliers)
     est = estimate(est.valid ? est.xi : Vec6(track.Pi * cluster.velocity));
-  const bool valid = est.valid && est.num_inliers >= options_.min_inliers;
+  const bool valid = est.valid && est.num_inliers >= options_.min_inliers &&
+                     (est.T_w_o.topRightCorner<3, 1>() - T_w_o_prev.topRightCorner<3, 1>()).norm() <=
+                         options_.max_step_m;
   // Lost its points while its instance is still associated: new points from the instance,
   // same track. Otherwise the instance stays claimed by a failing cluster until it dies
   // (max_misses frames) and only then starts a new track: a gap and a fragmented track.

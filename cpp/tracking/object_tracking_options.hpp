@@ -27,6 +27,7 @@ struct ObjectTrackingOptions {
   int min_shared_points = 5;        // matched points an instance must share with a cluster
   double min_mask_overlap = 0.5;    // fraction of projected cluster points inside the mask
   int min_inliers = 6;              // inliers of the twist LM for a tracked frame
+  double max_step_m = 5.0;          // object motion per frame beyond this is no motion (a fit gone wrong)
   int max_misses = 5;               // frames without a valid twist before the track ends
   int reseed_after_misses = 1;      // failed frames before new points replace a cluster's (0: never)
   double max_point_spread_m = 4.0;  // new points farther from the cluster median are dropped
@@ -73,6 +74,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("min_shared_points", o.min_shared_points, 1, 100000);
   visit("min_mask_overlap", o.min_mask_overlap, 0.0, 1.0);
   visit("min_inliers", o.min_inliers, 3, 100000);  // 3 points fix a rigid motion
+  visit("max_step_m", o.max_step_m, 0.01, 1000.0);
   visit("max_misses", o.max_misses, 0, 100000);
   visit("reseed_after_misses", o.reseed_after_misses, 0, 100000);
   visit("max_point_spread_m", o.max_point_spread_m, 0.1, 1000.0);

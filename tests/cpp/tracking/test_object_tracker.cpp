@@ -243,6 +243,35 @@ TEST_F(TrackerScene, CarWithoutFlowIsTrackedFromTheMotionModelProjection) {
   expect_motion(track, car, 0);
 }
 
+TEST_F(TrackerScene, MotionBeyondMaxStepIsNotATrackedFrame) {
+  // 3 m/frame away from the camera, found through the flow: tracked under a 5 m bound, not
+  // under a 2 m one (the fit is rejected, the frame predicted); each instance keeps its id so
+  // that the rejected frames are not re-seeded either
+  const Car car = make_car(rng, Vec3(0.5, 0.5, 12), Vec3(0, 0, 3.0), 0.0);
+  for (double max_step : {5.0, 2.0}) {
+    tracking::ObjectTrackingOptions options;
+    options.max_step_m = max_step;
+    options.reseed_after_misses = 0;
+    auto tracker = make_tracker(options);
+    int tracked = 0;
+    for (int i = 0; i < 4; ++i) {
+      SceneFrame f(i);
+      f.add_car(car, i, 5);
+      f.add_background(background);
+      tracked += tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp).num_tracked;
+    }
+    ASSERT_EQ(tracker.tracks().size(), 1u) << "max_step " << max_step;
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    if (max_step > 3.0) {
+      EXPECT_EQ(tracked, 3);
+      expect_motion(track, car, 0);
+    } else {
+      EXPECT_EQ(tracked, 0);
+      for (size_t r = 1; r < track.frames.size(); ++r) EXPECT_FALSE(track.frames[r].reported);
+    }
+  }
+}
+
 TEST_F(TrackerScene, FrameWithoutMasksKeepsTheTrack) {
   const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0), 0.02);
   auto tracker = make_tracker();
