@@ -170,14 +170,14 @@ void ObjectTracker::refine_window(int c) {
   wo.const_sigma_translation = options_.const_sigma_translation;
   wo.const_sigma_rotation = options_.const_sigma_rotation;
   wo.max_iterations = options_.window_iterations;
-  const std::vector<Mat4> before = w.T_w_o;
   if (!optim::refine_visual_object_window(camera_, w, track.Pi, wo).usable) return;
-  // an under-constrained window (few points, no e_const) can throw poses kilometres away
-  for (int r = 0; r < rows; ++r) {
-    if ((w.T_w_o[r].topRightCorner<3, 1>() - before[r].topRightCorner<3, 1>()).norm() > options_.max_step_m)
-      return;
-    if (r > 0 && (w.T_w_o[r].topRightCorner<3, 1>() - w.T_w_o[r - 1].topRightCorner<3, 1>()).norm() >
-                     options_.max_step_m)
+  // an under-constrained window (few points, no e_const) can throw poses kilometres away;
+  // a large correction of a pose is fine (a far cluster's first pose is metres off in depth),
+  // a step between consecutive poses beyond max_step_m is no motion
+  for (int r = 1; r < rows; ++r) {
+    const int frames_apart = track.frames[first + r].frame - track.frames[first + r - 1].frame;
+    if ((w.T_w_o[r].topRightCorner<3, 1>() - w.T_w_o[r - 1].topRightCorner<3, 1>()).norm() >
+        options_.max_step_m * frames_apart)
       return;
   }
   for (int r = 1; r < rows; ++r) track.frames[first + r].T_w_o = w.T_w_o[r];
