@@ -140,7 +140,10 @@ TEST(BundleAdjustmentDynamic, AnObjectSeenFromOneKeyframeIsLeftOut) {
   const auto r_one = bundle_adjust(one, cam);
   const auto r_none = bundle_adjust(none, cam);
   EXPECT_EQ(r_one.num_dynamic_residuals, 0);
-  for (int k = 0; k < kKeyframes; ++k) EXPECT_EQ(one.keyframes[k].T_c_w, none.keyframes[k].T_c_w);
+  // the same problem as without the object, up to the summation order of Ceres' two
+  // threads (the last bits differ from run to run)
+  for (int k = 0; k < kKeyframes; ++k)
+    EXPECT_TRUE(one.keyframes[k].T_c_w.isApprox(none.keyframes[k].T_c_w, 1e-9)) << "keyframe " << k;
   EXPECT_EQ(one.objects[0].poses[3].T_w_o, s.problem.objects[0].poses[3].T_w_o);  // untouched
 }
 
