@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "common/textured_planes.hpp"
+#include "common/random_descriptor.hpp"
 #include "features/stereo.hpp"
 #include "geometry/se3.hpp"
 #include "geometry/so3.hpp"
@@ -262,12 +263,7 @@ Vec3 transform(const Mat4& T, const Vec3& X) { return T.topLeftCorner<3, 3>() * 
 const Vec3 kUp(0, -1, 0);
 constexpr int kCarClass = 26, kRoadClass = 7;  // Cityscapes; cars have a planar link
 
-map::Descriptor random_descriptor(std::mt19937& rng) {
-  map::Descriptor d;
-  std::uniform_int_distribution<int> byte(0, 255);
-  for (auto& b : d) b = static_cast<std::uint8_t>(byte(rng));
-  return d;
-}
+using test_scenes::random_descriptor;
 
 // A rigid box of points moving on the road in front of a static rig (camera at the world
 // origin); its first frame shows only its points with x_o > kFirstSeenX (~40 %), so the

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "common/kitti_camera.hpp"
+#include "common/random_descriptor.hpp"
 #include "geometry/se3.hpp"
 #include "geometry/so3.hpp"
 #include "tracking/object_tracker.hpp"
@@ -26,12 +27,7 @@ const geometry::StereoCamera kCamera = test_scenes::kitti_camera();
 const Vec3 kUp(0, -1, 0);
 constexpr int kCar = 26, kRoad = 7;
 
-map::Descriptor random_descriptor(std::mt19937& rng) {
-  map::Descriptor d;
-  std::uniform_int_distribution<int> byte(0, 255);
-  for (auto& b : d) b = static_cast<std::uint8_t>(byte(rng));
-  return d;
-}
+using test_scenes::random_descriptor;
 
 // A rigid object: points in its own frame, a descriptor each, pose P_i = (R(yaw_i), c_i) in
 // the world with planar motion about kUp.
