@@ -2,6 +2,7 @@
 
 #include <opencv2/core/utility.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <stdexcept>
@@ -124,8 +125,9 @@ int check_left_right(const Keypoints& left, const std::vector<cv::Mat>& pyramid_
       const int xr_int = cvRound(xr), y = cvRound(pl.y);
       // the right window against the left windows of every disparity of the range (the
       // matched one and, for an occluder, larger ones: it is nearer)
-      // (a match nearer than min_depth, from another matcher, still finds itself)
-      const int x_first = static_cast<int>(std::floor(xr + window.min_disparity / scale));
+      // (a match outside [min_depth, max_depth], from another matcher, still finds itself)
+      const int x_first = std::min(static_cast<int>(std::floor(xr + window.min_disparity / scale)),
+                                   static_cast<int>(std::floor(pl.x - tolerance_px)) - 2);
       const int x_last = std::max(static_cast<int>(std::ceil(xr + window.max_disparity / scale)),
                                   static_cast<int>(std::ceil(pl.x + tolerance_px)) + 2);
       const SadScan back = scan_sad(R, L, xr_int, y, x_first, x_last, options.patch_radius,
