@@ -13,6 +13,7 @@
 
 #include "geometry/link_projection.hpp"
 #include "geometry/types.hpp"
+#include "objects/travel_direction.hpp"
 
 namespace twistslam::objects {
 
@@ -52,6 +53,7 @@ struct ObjectTrack {
   int hits = 0;                    // frames with an associated detection
   int misses = 0;                  // consecutive frames without one, up to the last frame
   int confirmed_frame = -1;        // frame at which it was confirmed (-1: never)
+  TravelDirection travel;          // its direction of travel in the object frame (vehicles)
 
   bool alive() const { return state != TrackState::kDead; }
   bool ever_confirmed() const { return confirmed_frame >= 0; }

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "optim/dynamic_reprojection_cost.hpp"
+#include "optim/heading_cost.hpp"
 #include "optim/object_costs.hpp"
 #include "optim/pose_parameterization.hpp"
 #include "optim/reprojection_costs.hpp"
@@ -141,6 +142,14 @@ ceres::ResidualBlockId ProblemBuilder::add_link(int pose_a, int pose_b, const Ma
                                                 double sigma_t, double sigma_r) {
   return problem_->AddResidualBlock(make_link_cost(Pi, sigma_t, sigma_r), nullptr,
                                     blocks_[pose_a].data, blocks_[pose_b].data);
+}
+
+ceres::ResidualBlockId ProblemBuilder::add_heading(int pose_a, int pose_b, const Vec3& axis_o,
+                                                   const Vec3& up_w, const Vec3& d_w,
+                                                   double sigma_m, double huber_delta) {
+  return problem_->AddResidualBlock(make_heading_cost(axis_o, up_w, d_w, sigma_m),
+                                    huber(huber_delta), blocks_[pose_a].data,
+                                    blocks_[pose_b].data);
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_dynamic_reprojection(

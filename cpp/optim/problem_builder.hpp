@@ -112,6 +112,13 @@ class ProblemBuilder {
                                             double information_scale = 1.0);
   ceres::ResidualBlockId add_link(int pose_a, int pose_b, const Mat6& Pi, double sigma_t,
                                   double sigma_r);
+  // Non-holonomic heading prior (heading_cost.hpp): the measured displacement d_w between
+  // object pose blocks a and b has no component across their travel axis axis_o (object
+  // frame, in the plane of normal up_w); pulls the rotations only. sigma_m in metres per
+  // frame, huber_delta in sigmas.
+  ceres::ResidualBlockId add_heading(int pose_a, int pose_b, const Vec3& axis_o,
+                                     const Vec3& up_w, const Vec3& d_w, double sigma_m,
+                                     double huber_delta);
 
   // e_dyna (dynamic_reprojection_cost.hpp): stereo (u_right >= 0) or mono reprojection of
   // the object-frame point block `object_point` (X_o) through the object pose block

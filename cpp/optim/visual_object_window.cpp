@@ -38,11 +38,16 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
                                point_block[obs.point], camera, obs.uv, obs.u_right,
                                obs.inv_sigma2, huber, o.min_depth);
   }
+  const bool use_heading = o.use_heading && w.travel_axis_o.norm() > 0.5;  // a unit axis or zero
   for (int i = 0; i + 1 < n; ++i) {
     const bool both_fixed = i + 1 < w.num_fixed_frames;
     if (o.use_link && !both_fixed)
       b.add_link(object_block[i], object_block[i + 1], Pi, o.link_sigma_translation,
                  o.link_sigma_rotation);
+    if (use_heading && !both_fixed)
+      b.add_heading(object_block[i], object_block[i + 1], w.travel_axis_o, w.up_w,
+                    w.T_w_o[i + 1].topRightCorner<3, 1>() - w.T_w_o[i].topRightCorner<3, 1>(),
+                    o.lateral_sigma, o.huber_heading);
     if (o.use_const && i >= 1 && i + 1 >= w.num_fixed_frames)
       b.add_constant_velocity(object_block[i - 1], object_block[i], object_block[i + 1], Pi,
                               o.const_sigma_translation, o.const_sigma_rotation, o.huber_const);

@@ -29,6 +29,9 @@ struct VisualObjectWindow {
   std::vector<Vec3> X_o;     // points in the object frame; refined in place
   std::vector<VisualObjectObservation> observations;
   int num_fixed_frames = 1;  // leading poses held fixed (the gauge and the past)
+  // e_head: the travel axis in the object frame (zero: unknown, no term) and the road normal
+  Vec3 travel_axis_o = Vec3::Zero();
+  Vec3 up_w = Vec3(0, -1, 0);
 };
 
 struct VisualObjectWindowOptions {
@@ -39,8 +42,11 @@ struct VisualObjectWindowOptions {
   double link_sigma_translation = 0.01;  // m/frame, out-of-link motion allowed
   double link_sigma_rotation = 0.002;    // rad/frame
   double huber_const = 3.0;              // sigmas
+  double lateral_sigma = 0.02;           // m/frame, e_head
+  double huber_heading = 3.0;            // sigmas
   bool use_const = true;
   bool use_link = true;
+  bool use_heading = true;               // e_head where the window has a travel axis
   bool refine_points = true;
   int max_iterations = 5;
   double min_depth = 0.1;                // m

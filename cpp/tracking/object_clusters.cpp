@@ -165,7 +165,13 @@ void ObjectTracker::refine_window(int c) {
                                 weights_.at(o.octave)});
     }
   }
+  if (options_.nonholonomic && track.link == geometry::LinkType::kPlanar) {
+    w.travel_axis_o = track.travel.axis(options_.travel_min_path_m, options_.travel_min_anisotropy);
+    w.up_w = up_w_;
+  }
   optim::VisualObjectWindowOptions wo;
+  wo.use_heading = options_.nonholonomic;
+  wo.lateral_sigma = options_.lateral_sigma_m;
   wo.use_const = options_.use_const;
   wo.const_sigma_translation = options_.const_sigma_translation;
   wo.const_sigma_rotation = options_.const_sigma_rotation;
@@ -185,6 +191,17 @@ void ObjectTracker::refine_window(int c) {
     track.frames[first + r].xi = track.Pi * geometry::twist_between(w.T_w_o[r], w.T_w_o[r + 1]);
   cluster.velocity = track.frames[first + rows - 2].xi;
   for (size_t k = 0; k < used.size(); ++k) cluster.points[used[k]].X_o = w.X_o[k];
+}
+
+void ObjectTracker::add_travel_step(objects::ObjectTrack& track) const {
+  if (track.link != geometry::LinkType::kPlanar || track.frames.size() < 2) return;
+  const objects::TrackFrame& prev = track.frames[track.frames.size() - 2];
+  const objects::TrackFrame& cur = track.frames.back();
+  if (!prev.reported || cur.frame != prev.frame + 1) return;
+  // a turn's chord points along the mean of both frames' headings (as heading_cost.hpp)
+  const Mat3 R_o_w = 0.5 * (cur.T_w_o.topLeftCorner<3, 3>() + prev.T_w_o.topLeftCorner<3, 3>()).transpose();
+  track.travel.add_step(R_o_w * (cur.T_w_o.topRightCorner<3, 1>() - prev.T_w_o.topRightCorner<3, 1>()),
+                        cur.T_w_o.topLeftCorner<3, 3>().transpose() * up_w_);
 }
 
 void ObjectTracker::recenter(int c) {

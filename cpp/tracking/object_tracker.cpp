@@ -249,6 +249,7 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
   }
   if (valid && options_.window_frames >= 3) refine_window(c);
   if (valid) recenter(c);
+  if (valid) add_travel_step(track);
   if (instance >= 0) {
     cluster.instance = instance;
     const auto cls = instance_class_.find(instance);
@@ -273,6 +274,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
     throw std::invalid_argument("flow: expected float32 (u, v) per pixel of the image size");
 
   T_c_w_of_frame_[frame.index] = frame.T_c_w;
+  up_w_ = up_w;
   while (static_cast<int>(T_c_w_of_frame_.size()) > std::max(options_.window_frames, 2) + 1)
     T_c_w_of_frame_.erase(T_c_w_of_frame_.begin());
   const size_t n = frame.keypoints.size();

@@ -107,8 +107,11 @@ class ObjectTracker : public ObjectBundleTerms {
   // False when the instance has too few points.
   bool reseed(int c, const Frame& frame, int instance, Mat4* T_w_o);
   void cull(objects::ObjectCluster& cluster) const;
-  // e_dyna + e_const over the cluster's last window_frames frames (eq. 9), camera fixed.
+  // e_dyna + e_const (+ e_head) over the cluster's last window_frames frames (eq. 9), camera
+  // fixed.
   void refine_window(int c);
+  // The last step of a tracked vehicle joins its travel direction (non-holonomic prior).
+  void add_travel_step(objects::ObjectTrack& track) const;
   // Moves the object frame's origin to the median of the cluster's confirmed points when it
   // lies farther than recenter_distance_m from it (every pose and point re-expressed).
   void recenter(int c);
@@ -124,6 +127,7 @@ class ObjectTracker : public ObjectBundleTerms {
   std::vector<objects::ObjectTrack> tracks_;
   std::vector<objects::ObjectCluster> clusters_;  // clusters_[k] holds tracks_[k]'s points
   std::map<int, Mat4> T_c_w_of_frame_;  // camera poses of the recent frames (window)
+  Vec3 up_w_ = Vec3(0, -1, 0);          // the road normal of the frame being tracked
   int next_id_ = 0;
   int last_frame_ = -1;
   // per keypoint of the current frame

@@ -36,12 +36,17 @@ struct ObjectTrackingOptions {
   double min_found_ratio = 0.25;    // points matched in fewer of the frames predicting them
   int cull_after_visible = 5;       // ... are dropped once predicted this often
   int lm_iterations = 10;           // LM iterations per pass
-  int window_frames = 5;            // sliding window of e_dyna + e_const (0: off)
+  int window_frames = 8;            // sliding window of e_dyna + e_const + e_head (< 3: off)
   bool use_const = true;            // e_const in the window
   double const_sigma_translation = 0.05;  // m/frame, change of the translational twist
   double const_sigma_rotation = 0.005;    // rad/frame, change of the rotational twist
   int window_iterations = 5;        // Ceres iterations of the window
   double recenter_distance_m = 0.5; // origin moved to the points' median beyond this (0: never)
+  // non-holonomic prior in the window (optim/lateral_velocity_cost.hpp), planar-link classes
+  bool nonholonomic = true;
+  double lateral_sigma_m = 0.02;     // m/frame across the travel axis
+  double travel_min_path_m = 3.0;    // m travelled before the travel axis is trusted
+  double travel_min_anisotropy = 10; // largest / second eigenvalue of the step moments
   // extra keypoints inside object masks (tracking/object_keypoints.hpp)
   bool extra_keypoints = true;
   int extra_keypoints_max = 1000;     // per frame, over all object masks
@@ -89,6 +94,10 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("const_sigma_rotation", o.const_sigma_rotation, 1e-6, 10.0);
   visit("window_iterations", o.window_iterations, 1, 1000);
   visit("recenter_distance_m", o.recenter_distance_m, 0.0, 1000.0);
+  visit("nonholonomic", o.nonholonomic, 0, 1);
+  visit("lateral_sigma_m", o.lateral_sigma_m, 1e-4, 100.0);
+  visit("travel_min_path_m", o.travel_min_path_m, 0.0, 10000.0);
+  visit("travel_min_anisotropy", o.travel_min_anisotropy, 1.0, 1e6);
   visit("extra_keypoints", o.extra_keypoints, 0, 1);
   visit("extra_keypoints_max", o.extra_keypoints_max, 0, 100000);
   visit("extra_keypoint_levels", o.extra_keypoint_levels, 1, 32);

@@ -30,17 +30,20 @@ constexpr int kCar = 26, kRoad = 7;
 using test_scenes::random_descriptor;
 
 // A rigid object: points in its own frame, a descriptor each, pose P_i = (R(yaw_i), c_i) in
-// the world with planar motion about kUp.
+// the world with planar motion about kUp. It drives like a vehicle: its velocity turns with
+// its yaw (constant in its own frame), as the tracker's non-holonomic heading prior expects.
 struct Car {
   std::vector<Vec3> X_o;
   std::vector<map::Descriptor> descriptors;
   Vec3 c0 = Vec3::Zero();
-  Vec3 velocity = Vec3::Zero();  // m/frame, world
+  Vec3 velocity = Vec3::Zero();  // m/frame, world at frame 0 (turns with the yaw)
   double yaw_rate = 0;           // rad/frame about kUp
   int label = kCar;
 
   Mat4 pose(int i) const {
-    return geometry::make_pose(geometry::so3_exp(kUp * (yaw_rate * i)), c0 + velocity * i);
+    Vec3 c = c0;
+    for (int k = 0; k < i; ++k) c += geometry::so3_exp(kUp * (yaw_rate * k)) * velocity;
+    return geometry::make_pose(geometry::so3_exp(kUp * (yaw_rate * i)), c);
   }
   // True world-frame motion from frame i to i + 1: P_{i+1} P_i^-1.
   Mat4 motion(int i) const { return pose(i + 1) * geometry::se3_inverse(pose(i)); }
@@ -223,6 +226,31 @@ TEST_F(TrackerScene, CarWithChangingInstanceIdsIsOneTrackFollowingTheTrueMotionW
   EXPECT_GE(tracker.clusters()[0].points.size(), 60u);
   EXPECT_LE(tracker.clusters()[0].points.size(), car.X_o.size());
   EXPECT_EQ(tracker.clusters()[0].instance, instance_id(9));
+}
+
+TEST_F(TrackerScene, TrackLearnsTheDirectionItTravelsInWithinItsOwnFrame) {
+  // 0.5 m/frame, heading 22 deg off the object frame's x axis, turning 0.02 rad/frame
+  const Vec3 v(0.46, 0, 0.19);
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), v, 0.02);
+  auto tracker = make_tracker();
+  std::vector<tracking::ObjectTrackingReport> reports;
+  run_car(tracker, car, background, 10, /*use_flow=*/true, &reports);
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const objects::ObjectTrack& track = tracker.tracks()[0];
+  EXPECT_NEAR(track.travel.path_m, 9 * v.norm(), 0.2);
+  // the object frame starts with the world's rotation: the axis is the velocity's direction
+  const Vec3 axis = track.travel.axis(3.0, 10.0);
+  ASSERT_NEAR(axis.norm(), 1.0, 1e-9);
+  EXPECT_GT(std::abs(axis.dot(v.normalized())), std::cos(1.0 * M_PI / 180.0));
+  // a free-link class learns none (a pedestrian may walk sideways)
+  Car person = make_car(rng, Vec3(-2, 0.5, 15), v, 0.0);
+  person.label = 24;
+  auto tracker2 = make_tracker();
+  reports.clear();
+  run_car(tracker2, person, background, 10, /*use_flow=*/true, &reports);
+  ASSERT_EQ(tracker2.tracks().size(), 1u);
+  EXPECT_EQ(tracker2.tracks()[0].link, geometry::LinkType::kFree);
+  EXPECT_EQ(tracker2.tracks()[0].travel.path_m, 0.0);
 }
 
 TEST_F(TrackerScene, CarWithoutFlowIsTrackedFromTheMotionModelProjection) {

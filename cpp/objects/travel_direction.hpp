@@ -1,0 +1,25 @@
+#pragma once
+// The direction a vehicle travels in, in its own object frame: the axis the non-holonomic
+// prior (optim/lateral_velocity_cost.hpp) ties its yaw to. A cluster's object frame starts
+// with the camera's rotation (no canonical pose before detections), so the axis is learned
+// from the track: the principal axis of its frame-to-frame displacements expressed in the
+// object frame, d_o = R_w_o^T (t_w_o(i) - t_w_o(i-1)), projected onto the road plane. The
+// second moment sum(d_o d_o^T) is sign-free (a car that reverses keeps its axis) and weighs
+// each step by its length squared, so slow, noisy steps count little.
+#include "geometry/types.hpp"
+
+namespace twistslam::objects {
+
+struct TravelDirection {
+  Mat3 moments = Mat3::Zero();  // sum of d_o d_o^T, m^2
+  double path_m = 0;            // sum of |d_o|, m
+
+  // Adds one step (object frame, m); up_o: the road normal in the object frame.
+  void add_step(const Vec3& d_o, const Vec3& up_o);
+  // Unit travel axis (sign arbitrary), or zero while the track has moved less than
+  // min_path_m or its steps spread too much: the largest eigenvalue of the moments must be
+  // min_anisotropy times the second.
+  Vec3 axis(double min_path_m, double min_anisotropy) const;
+};
+
+}  // namespace twistslam::objects
