@@ -7,6 +7,7 @@
 #include "geometry/link_projection.hpp"
 #include "geometry/se3.hpp"
 #include "optim/visual_object_window.hpp"
+#include "tracking/ground_contact.hpp"
 #include "tracking/object_point_helpers.hpp"
 #include "tracking/object_tracker.hpp"
 
@@ -36,9 +37,33 @@ int ObjectTracker::min_seed_points(geometry::LinkType link) const {
                                              : options_.min_new_cluster_points;
 }
 
+std::vector<std::pair<int, Vec3>> ObjectTracker::ground_contact_points(const Frame& frame,
+                                                                       int instance) const {
+  std::vector<std::pair<int, Vec3>> out;
+  const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
+  const GroundContact contact =
+      ground_contact_depth(instances_, labels_, instance, options_.road_class_id, camera_, T_w_c,
+                           road_plane_w_, options_.min_contact_columns,
+                           options_.min_contact_fraction, options_.max_depth_m);
+  if (!contact.valid) return out;
+  const map::StereoKeypoints& k = frame.keypoints;
+  for (int i = 0; i < static_cast<int>(k.size()); ++i) {
+    if (instance_of_keypoint_[i] != instance || claimed_by_[i] >= 0 || k.has_depth(i)) continue;
+    out.emplace_back(i, transform(T_w_c, camera_.backproject(k.uv[i], contact.depth)));
+  }
+  return out;
+}
+
 bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points,
-                                std::vector<std::pair<int, Vec3>>* kept, Vec3* centroid) const {
-  const auto fresh = free_instance_points(frame, instance);
+                                bool ground_contact, std::vector<std::pair<int, Vec3>>* kept,
+                                Vec3* centroid) const {
+  auto fresh = free_instance_points(frame, instance);
+  if (static_cast<int>(fresh.size()) < min_points && ground_contact && options_.ground_contact &&
+      !labels_.empty() && road_plane_w_.head<3>().norm() > 0) {
+    const auto mono = ground_contact_points(frame, instance);
+    // the stereo points keep their depth: they place the car where they can
+    fresh.insert(fresh.end(), mono.begin(), mono.end());
+  }
   if (static_cast<int>(fresh.size()) < min_points) return false;
   std::vector<Vec3> X;
   for (const auto& f : fresh) X.push_back(f.second);
@@ -84,7 +109,9 @@ void ObjectTracker::add_points(int c, const Frame& frame, int instance) {
 bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o) {
   std::vector<std::pair<int, Vec3>> kept;
   Vec3 centroid;
-  if (!seed_points(frame, instance, min_seed_points(tracks_[c].link), &kept, &centroid)) return false;
+  const bool vehicle = tracks_[c].link == geometry::LinkType::kPlanar;
+  if (!seed_points(frame, instance, min_seed_points(tracks_[c].link), vehicle, &kept, &centroid))
+    return false;
   objects::ObjectCluster& cluster = clusters_[c];
   // A cluster without a velocity yet (it failed in its second frame) has no prediction worth
   // keeping: its origin moves to the new points' centroid, as a new cluster's would, and its
@@ -107,7 +134,7 @@ bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id
   Vec3 centroid;
   const bool planar = contains(options_.planar_class_ids, class_id);
   const geometry::LinkType link = planar ? geometry::LinkType::kPlanar : geometry::LinkType::kFree;
-  if (!seed_points(frame, instance, min_seed_points(link), &kept, &centroid)) return false;
+  if (!seed_points(frame, instance, min_seed_points(link), planar, &kept, &centroid)) return false;
 
   objects::ObjectTrack track;
   track.id = next_id_++;

@@ -263,7 +263,8 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
 }
 
 ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& instances,
-                                          const cv::Mat& flow, const Vec3& up_w) {
+                                          const cv::Mat& flow, const Vec3& up_w,
+                                          const cv::Mat& labels, const Vec4& road_plane_w) {
   ObjectTrackingReport report;
   if (!options_.enabled) return report;
   if (!instances.empty() && (instances.type() != CV_32SC1 || instances.cols != camera_.width ||
@@ -272,9 +273,15 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   if (!flow.empty() && (flow.type() != CV_32FC2 || flow.cols != camera_.width ||
                         flow.rows != camera_.height))
     throw std::invalid_argument("flow: expected float32 (u, v) per pixel of the image size");
+  if (!labels.empty() && (labels.type() != CV_32SC1 || labels.cols != camera_.width ||
+                          labels.rows != camera_.height))
+    throw std::invalid_argument("labels: expected int32 class ids of the image size");
 
   T_c_w_of_frame_[frame.index] = frame.T_c_w;
   up_w_ = up_w;
+  instances_ = instances;
+  labels_ = labels;
+  road_plane_w_ = road_plane_w;
   while (static_cast<int>(T_c_w_of_frame_.size()) > std::max(options_.window_frames, 2) + 1)
     T_c_w_of_frame_.erase(T_c_w_of_frame_.begin());
   const size_t n = frame.keypoints.size();

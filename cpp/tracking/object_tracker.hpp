@@ -50,8 +50,12 @@ class ObjectTracker : public ObjectBundleTerms {
   // (clusters are still tracked from their matches); flow: CV_32FC2 optical flow from the
   // previous frame to this one (NaN: none), or empty; up_w: the road normal in the world
   // frame (planar link). Throws std::invalid_argument on wrong sizes or types.
+  // labels: empty or CV_32SC1 class ids per pixel and road_plane_w the road (n, d) in the
+  // world (zero: none): with both, a vehicle instance with too few stereo points may start a
+  // cluster at its ground-contact depth (ground_contact.hpp).
   ObjectTrackingReport track(const Frame& frame, const cv::Mat& instances, const cv::Mat& flow,
-                             const Vec3& up_w);
+                             const Vec3& up_w, const cv::Mat& labels = cv::Mat(),
+                             const Vec4& road_plane_w = Vec4::Zero());
 
   // The frame just tracked becomes a keyframe: its object observations are kept for the
   // local BA (e_dyna), the latest max_keyframes per point.
@@ -92,9 +96,14 @@ class ObjectTracker : public ObjectBundleTerms {
   // Stereo keypoints of `instance` no cluster claimed, in the world frame.
   std::vector<std::pair<int, Vec3>> free_instance_points(const Frame& frame, int instance) const;
   // The free stereo points of `instance` within max_point_spread_m of their median, and
-  // their centroid (world frame); false with fewer than min_points.
-  bool seed_points(const Frame& frame, int instance, int min_points,
+  // their centroid (world frame); false with fewer than min_points. With ground_contact
+  // (vehicles) and too few stereo points, the instance's keypoints without depth are placed
+  // at its ground-contact depth instead (ground_contact.hpp).
+  bool seed_points(const Frame& frame, int instance, int min_points, bool ground_contact,
                    std::vector<std::pair<int, Vec3>>* kept, Vec3* centroid) const;
+  // The free keypoints of `instance` without a stereo depth, at its ground-contact depth
+  // (world frame); empty when the mask shows no contact with the road.
+  std::vector<std::pair<int, Vec3>> ground_contact_points(const Frame& frame, int instance) const;
   // Stereo points a new (or re-seeded) cluster of this link needs: the planar link's
   // 3-DoF twist is fixed by fewer points than a free 6-DoF one.
   int min_seed_points(geometry::LinkType link) const;
@@ -128,6 +137,8 @@ class ObjectTracker : public ObjectBundleTerms {
   std::vector<objects::ObjectCluster> clusters_;  // clusters_[k] holds tracks_[k]'s points
   std::map<int, Mat4> T_c_w_of_frame_;  // camera poses of the recent frames (window)
   Vec3 up_w_ = Vec3(0, -1, 0);          // the road normal of the frame being tracked
+  cv::Mat instances_, labels_;          // the frame being tracked (headers, not copies)
+  Vec4 road_plane_w_ = Vec4::Zero();    // its road plane (zero: none)
   int next_id_ = 0;
   int last_frame_ = -1;
   // per keypoint of the current frame

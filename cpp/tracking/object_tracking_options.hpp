@@ -24,6 +24,11 @@ struct ObjectTrackingOptions {
   int flow_max_hamming = 80;        // bits, for keypoints searched around the flow prediction
   int min_new_cluster_points = 10;  // stereo keypoints inside a new instance mask (free link)
   int min_new_planar_cluster_points = 6;  // ... of a planar-link class (3-DoF twist)
+  // a vehicle instance with too few stereo points starts at its ground-contact depth
+  // (tracking/ground_contact.hpp; needs the class image and the road plane)
+  bool ground_contact = true;
+  int min_contact_columns = 5;      // mask columns with road right below their lowest pixel
+  double min_contact_fraction = 0.5; // ... and this fraction of the mask's columns
   int min_shared_points = 5;        // matched points an instance must share with a cluster
   double min_mask_overlap = 0.5;    // fraction of projected cluster points inside the mask
   int min_inliers = 6;              // inliers of the twist LM for a tracked frame
@@ -76,6 +81,9 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("flow_max_hamming", o.flow_max_hamming, 0, 256);
   visit("min_new_cluster_points", o.min_new_cluster_points, 3, 100000);
   visit("min_new_planar_cluster_points", o.min_new_planar_cluster_points, 3, 100000);
+  visit("ground_contact", o.ground_contact, 0, 1);
+  visit("min_contact_columns", o.min_contact_columns, 1, 100000);
+  visit("min_contact_fraction", o.min_contact_fraction, 0.0, 1.0);
   visit("min_shared_points", o.min_shared_points, 1, 100000);
   visit("min_mask_overlap", o.min_mask_overlap, 0.0, 1.0);
   visit("min_inliers", o.min_inliers, 3, 100000);  // 3 points fix a rigid motion

@@ -109,7 +109,8 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
   // local mapping so that a keyframe's BA sees this frame's object observations (e_dyna).
   const bool track_objects = tracked && (!instances.empty() || !object_tracker_.tracks().empty());
   if (track_objects) {
-    result.objects = object_tracker_.track(frame, instances, flow, road_up_w_);
+    result.objects = object_tracker_.track(frame, instances, flow, road_up_w_, labels,
+                                           road_plane_.plane());
     if (result.is_keyframe) object_tracker_.mark_keyframe(frame.index, options_.local_ba.window);
     timer.lap("objects");
   }

@@ -59,6 +59,18 @@ class VisualObjectsConfig:
         6, "... of a planar-link class (vehicles): the 3-DoF twist needs fewer points. Far "
         "oncoming cars (35-50 m) get 6-9 stereo points, the part of them the right camera "
         "also sees; 6 instead of 10: urban seed 2 cars tracked >= 90 % 1/4 -> 4/4", "points")
+    ground_contact: bool = param(
+        True, "a vehicle instance with too few stereo points starts its cluster at the depth "
+        "where its mask meets the road plane (the right camera sees other occluders: far "
+        "oncoming and queued cars show 1-4 stereo depths among 17-37 keypoints); not in the "
+        "paper")
+    min_contact_columns: int = param(
+        5, "mask columns whose lowest pixel has road right below it, for a ground-contact "
+        "depth", "columns", lo=1)
+    min_contact_fraction: float = param(
+        0.5, "... and at least this fraction of the mask's columns: a car whose lower edge is "
+        "mostly hidden behind a nearer one would take the occluder's contact", "fraction",
+        lo=0.0, hi=1.0)
     min_shared_points: int = param(
         5, "matched points an instance must share with a cluster to be associated", "points")
     min_mask_overlap: float = param(

@@ -84,6 +84,7 @@ struct SceneFrame {
   tracking::Frame frame;
   cv::Mat instances;  // CV_32SC1, 0 = none
   cv::Mat flow;       // CV_32FC2, NaN where unknown (filled at the car's keypoints)
+  bool mono = false;  // keypoints without a stereo match (the right camera does not see them)
 
   explicit SceneFrame(int index) {
     frame.index = index;
@@ -100,8 +101,8 @@ struct SceneFrame {
     auto& k = frame.keypoints;
     k.uv.push_back(uv);
     k.octave.push_back(octave);
-    k.u_right.push_back(kCamera.project_right(X_c).x());
-    k.depth.push_back(X_c.z() + kCamera.t_left.z());
+    k.u_right.push_back(mono ? -1.0 : kCamera.project_right(X_c).x());
+    k.depth.push_back(mono ? -1.0 : X_c.z() + kCamera.t_left.z());
     k.descriptors.push_back(d);
     k.label.push_back(label);
     frame.usable.push_back(label == kRoad);
@@ -294,6 +295,46 @@ TEST_F(TrackerScene, MotionBeyondMaxStepIsNotATrackedFrame) {
       for (size_t r = 1; r < track.frames.size(); ++r) EXPECT_FALSE(track.frames[r].reported);
     }
   }
+}
+
+TEST_F(TrackerScene, CarTheRightCameraCannotSeeStartsAtItsGroundContactDepth) {
+  // a car 16 m ahead standing on the road (its lowest points at the road, 1.65 m below the
+  // camera), every one of its keypoints without a stereo depth
+  Car car = make_car(rng, Vec3(1.0, 0.9, 16), Vec3(0, 0, 0.4), 0.0);
+  for (Vec3& X : car.X_o) X.z() = -0.9;  // its rear face, as a lead car shows
+  const Vec4 road_plane(0, -1, 0, 1.65);
+  auto run = [&](bool with_labels) {
+    auto tracker = make_tracker();
+    std::vector<tracking::ObjectTrackingReport> reports;
+    for (int i = 0; i < 6; ++i) {
+      SceneFrame f(i);
+      f.mono = true;
+      f.add_car(car, i, instance_id(i));
+      f.mono = false;
+      f.add_background(background);
+      // road everywhere under the car's mask, the car's class on it
+      cv::Mat labels(kCamera.height, kCamera.width, CV_32SC1, cv::Scalar(kRoad));
+      labels.setTo(kCar, f.instances > 0);
+      reports.push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
+                                      with_labels ? labels : cv::Mat(), road_plane));
+    }
+    return std::make_pair(std::move(tracker), reports);
+  };
+  auto [without, no_reports] = run(false);
+  EXPECT_TRUE(without.tracks().empty());  // no stereo point: nothing to start from
+  auto [with, reports] = run(true);
+  ASSERT_EQ(with.tracks().size(), 1u);
+  EXPECT_EQ(reports[0].num_new, 1);
+  for (int i = 1; i < 6; ++i) EXPECT_EQ(reports[i].num_tracked, 1) << "frame " << i;
+  const objects::ObjectTrack& track = with.tracks()[0];
+  // placed at the rear face's depth (15.1 m; the mask's lower edge is 3 px below the lowest
+  // keypoint, a little nearer), not metres off
+  const Vec3 origin = track.frames[0].T_w_o.topRightCorner<3, 1>();
+  EXPECT_NEAR(origin.z(), car.c0.z() - 0.9, 0.8);
+  EXPECT_NEAR(origin.x(), car.c0.x(), 0.3);
+  // and it follows the car's 0.4 m/frame (mono points: motion from the reprojections)
+  const Vec3 moved = track.frames.back().T_w_o.topRightCorner<3, 1>() - origin;
+  EXPECT_NEAR(moved.z(), 0.4 * 5, 0.4);
 }
 
 TEST_F(TrackerScene, FrameWithoutMasksKeepsTheTrack) {
