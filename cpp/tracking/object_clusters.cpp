@@ -1,6 +1,7 @@
 // The life cycle of an object cluster (paper sec. "Clusters creation"): new clusters from
-// instance masks, points joining and being culled, re-seeding after a failure, the sliding
-// window of e_dyna + e_const, and re-centring of the object frame. Search and twist
+// instance masks (at the ground-contact depth where stereo fails), points joining and being
+// culled, re-seeding after a failure, the sliding window of e_dyna + e_const + e_head, the
+// travel direction, and re-centring of the object frame. Search and twist
 // estimation are in object_tracker.cpp.
 #include <algorithm>
 

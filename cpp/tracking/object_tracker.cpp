@@ -338,6 +338,9 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
     if (tracks_[c].alive()) tracks_[c].class_id = clusters_[c].class_votes.best(tracks_[c].class_id);
   for (int owner : claimed_by_) report.num_points += owner >= 0;
   last_frame_ = frame.index;
+  // the caller's images are this call's only: no view of them outlives it
+  instances_.release();
+  labels_.release();
   return report;
 }
 

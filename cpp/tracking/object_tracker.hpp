@@ -137,7 +137,7 @@ class ObjectTracker : public ObjectBundleTerms {
   std::vector<objects::ObjectCluster> clusters_;  // clusters_[k] holds tracks_[k]'s points
   std::map<int, Mat4> T_c_w_of_frame_;  // camera poses of the recent frames (window)
   Vec3 up_w_ = Vec3(0, -1, 0);          // the road normal of the frame being tracked
-  cv::Mat instances_, labels_;          // the frame being tracked (headers, not copies)
+  cv::Mat instances_, labels_;          // during track(): the caller's images (views)
   Vec4 road_plane_w_ = Vec4::Zero();    // its road plane (zero: none)
   int next_id_ = 0;
   int last_frame_ = -1;
