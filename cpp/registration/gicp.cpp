@@ -1,0 +1,164 @@
+#include "registration/gicp.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "geometry/se3.hpp"
+#include "geometry/so3.hpp"
+#include "registration/point_covariances.hpp"
+
+namespace twistslam::registration {
+
+GicpScan make_gicp_scan(const Eigen::Ref<const Points3>& points, int num_neighbors) {
+  if (num_neighbors < 3)
+    throw std::invalid_argument("make_gicp_scan: num_neighbors must be >= 3 (a plane needs 3)");
+  GicpScan scan;
+  scan.num_neighbors = num_neighbors;
+  scan.points.reserve(points.rows());
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const Vec3 p = points.row(i).transpose();
+    if (p.allFinite())
+      scan.points.push_back(p);
+    else
+      ++scan.num_dropped_non_finite;
+  }
+  scan.tree = KdTree(scan.points);
+  if (static_cast<int>(scan.points.size()) >= num_neighbors)
+    scan.covariances = plane_covariances(scan.points, scan.tree, num_neighbors);
+  return scan;
+}
+
+void validate(const GicpOptions& o) {
+  auto require = [](bool ok, const char* what) {
+    if (!ok) throw std::invalid_argument(std::string("GicpOptions: ") + what);
+  };
+  require(std::isfinite(o.max_correspondence_distance_m) && o.max_correspondence_distance_m > 0,
+          "max_correspondence_distance_m must be finite and > 0");
+  require(o.max_iterations >= 1, "max_iterations must be >= 1");
+  require(std::isfinite(o.convergence_translation_m) && o.convergence_translation_m >= 0,
+          "convergence_translation_m must be finite and >= 0");
+  require(std::isfinite(o.convergence_rotation_rad) && o.convergence_rotation_rad >= 0,
+          "convergence_rotation_rad must be finite and >= 0");
+  require(o.num_neighbors >= 3, "num_neighbors must be >= 3");
+  require(std::isfinite(o.huber_threshold) && o.huber_threshold > 0,
+          "huber_threshold must be finite and > 0");
+  require(o.projector.allFinite(), "projector must be finite");
+  require(o.min_correspondences >= 1, "min_correspondences must be >= 1");
+}
+
+std::string status_name(GicpStatus status) {
+  switch (status) {
+    case GicpStatus::kConverged: return "converged";
+    case GicpStatus::kMaxIterations: return "max_iterations";
+    case GicpStatus::kTooFewPoints: return "too_few_points";
+    case GicpStatus::kTooFewCorrespondences: return "too_few_correspondences";
+    case GicpStatus::kDegenerate: return "degenerate";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// The normal equations at one estimate of T.
+struct Linearization {
+  Mat6 H = Mat6::Zero();
+  Vec6 b = Vec6::Zero();
+  double cost = 0.0;
+  double sum_squared_error_m2 = 0.0;
+  int num_inliers = 0;
+};
+
+Linearization linearize(const GicpScan& source, const GicpScan& target, const Mat4& T,
+                        const GicpOptions& o) {
+  Linearization lin;
+  const Mat3 R = T.topLeftCorner<3, 3>();
+  const Vec3 t = T.topRightCorner<3, 1>();
+  const double max_d2 = o.max_correspondence_distance_m * o.max_correspondence_distance_m;
+  const bool huber = o.kernel == RobustKernel::kHuber;
+  Eigen::Matrix<double, 3, 6> J;
+  J.leftCols<3>() = -Mat3::Identity();
+  for (std::size_t i = 0; i < source.points.size(); ++i) {
+    const Vec3 q = R * source.points[i] + t;
+    const Neighbor nn = target.tree.nearest(q, max_d2);
+    if (nn.index < 0) continue;
+    const Vec3 e = target.points[nn.index] - q;
+    const Mat3 C = target.covariances[nn.index] + R * source.covariances[i] * R.transpose();
+    const Mat3 W = C.inverse();  // closed form for 3x3; C >= eps I, so well conditioned
+    const double m2 = e.dot(W * e);
+    double weight = 1.0;
+    double rho = m2;
+    if (huber) {
+      const double m = std::sqrt(m2);
+      if (m > o.huber_threshold) {
+        weight = o.huber_threshold / m;
+        rho = o.huber_threshold * (2.0 * m - o.huber_threshold);
+      }
+    }
+    // e(delta) = e - delta_v + q x delta_w for T <- exp(delta) T.
+    J.rightCols<3>() = geometry::hat(q);
+    const Eigen::Matrix<double, 6, 3> JtW = weight * J.transpose() * W;
+    lin.H.noalias() += JtW * J;
+    lin.b.noalias() += JtW * e;
+    lin.cost += rho;
+    lin.sum_squared_error_m2 += e.squaredNorm();
+    ++lin.num_inliers;
+  }
+  return lin;
+}
+
+}  // namespace
+
+GicpResult gicp(const GicpScan& source, const GicpScan& target, const Mat4& T_init,
+                const GicpOptions& options) {
+  validate(options);
+  GicpResult result;
+  result.T_target_source = T_init;
+  if (!source.usable() || !target.usable()) {
+    result.status = GicpStatus::kTooFewPoints;
+    return result;
+  }
+  const Mat6& Pi = options.projector;
+  // Identity on the directions the link forbids, so the restricted system stays invertible and
+  // those directions get a zero update.
+  const Mat6 locked = Mat6::Identity() - Pi;
+  Mat4 T = T_init;
+  result.status = GicpStatus::kMaxIterations;
+  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
+    result.iterations = iteration;
+    const Linearization lin = linearize(source, target, T, options);
+    result.num_inliers = lin.num_inliers;
+    if (lin.num_inliers < options.min_correspondences) {
+      result.status = GicpStatus::kTooFewCorrespondences;
+      break;
+    }
+    result.cost = lin.cost;
+    result.rmse_m = std::sqrt(lin.sum_squared_error_m2 / lin.num_inliers);
+    result.information = lin.H;
+    const Mat6 H = Pi * lin.H * Pi + locked;
+    const Eigen::LDLT<Mat6> ldlt(H);
+    const Vec6 delta = Pi * ldlt.solve(-(Pi * lin.b));
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !delta.allFinite()) {
+      result.status = GicpStatus::kDegenerate;
+      break;
+    }
+    T = geometry::se3_exp(delta) * T;
+    if (delta.head<3>().norm() < options.convergence_translation_m &&
+        delta.tail<3>().norm() < options.convergence_rotation_rad) {
+      result.status = GicpStatus::kConverged;
+      break;
+    }
+  }
+  result.T_target_source = T;
+  result.converged = result.status == GicpStatus::kConverged;
+  return result;
+}
+
+GicpResult gicp(const Eigen::Ref<const Points3>& source, const Eigen::Ref<const Points3>& target,
+                const Mat4& T_init, const GicpOptions& options) {
+  validate(options);
+  const GicpScan s = make_gicp_scan(source, options.num_neighbors);
+  const GicpScan t = make_gicp_scan(target, options.num_neighbors);
+  return gicp(s, t, T_init, options);
+}
+
+}  // namespace twistslam::registration

@@ -1,0 +1,89 @@
+#pragma once
+// Generalized ICP between two object scans (Segal et al. 2009; TwistSLAM++ eq. 6-7): finds
+// T_target_source minimising sum_i e_i^T (C_t + R C_s R^T)^-1 e_i, e_i = t_j - T s_i, with
+// nearest-neighbour correspondences re-found every iteration. Gauss-Newton on SE(3) with the
+// left update T <- exp(Pi delta) T, delta = [v; w] expressed in the target scan's frame and Pi
+// the link projector (geometry/link_projection.hpp; identity = free motion).
+#include <string>
+#include <vector>
+
+#include "geometry/types.hpp"
+#include "registration/kdtree.hpp"
+
+namespace twistslam::registration {
+
+// A scan ready for GICP: finite points, their KD-tree and plane covariances. Build it once;
+// the scan of frame i serves as the target at i and as the source at i + 1.
+struct GicpScan {
+  std::vector<Vec3> points;
+  std::vector<Mat3> covariances;  // empty when the scan has too few points
+  KdTree tree;
+  int num_neighbors = 0;
+  int num_dropped_non_finite = 0;  // NaN / Inf rows left out of `points`
+
+  // True when there are covariances, i.e. at least num_neighbors finite points.
+  bool usable() const { return !covariances.empty(); }
+};
+
+// Builds a scan from (N, 3) points (m); NaN / Inf rows are dropped and counted. With fewer than
+// num_neighbors finite points the scan is returned without covariances (usable() false).
+// Throws std::invalid_argument when num_neighbors < 3.
+GicpScan make_gicp_scan(const Eigen::Ref<const Points3>& points, int num_neighbors);
+
+enum class RobustKernel { kNone, kHuber };
+
+struct GicpOptions {
+  // Source / target pairs farther apart (after the current estimate) are not correspondences.
+  double max_correspondence_distance_m = 1.0;
+  int max_iterations = 30;
+  // Converged when an update moves less than both of these.
+  double convergence_translation_m = 1e-4;
+  double convergence_rotation_rad = 1e-4;
+  // Neighbours per covariance (itself included); used when gicp() builds the scans.
+  int num_neighbors = 20;
+  RobustKernel kernel = RobustKernel::kNone;
+  // Huber threshold on the Mahalanobis residual sqrt(e^T C^-1 e) (C has unit in-plane
+  // variance, so this is m along a plane and ~sqrt(eps) m across it).
+  double huber_threshold = 0.1;
+  // Projector onto the twist sub-space the link allows, in the target frame.
+  Mat6 projector = Mat6::Identity();
+  // Fewer correspondences than this leave the estimate unconstrained: stop, not converged.
+  int min_correspondences = 10;
+};
+
+// Throws std::invalid_argument naming the first bad field.
+void validate(const GicpOptions& options);
+
+enum class GicpStatus {
+  kConverged,
+  kMaxIterations,         // the last update was still above the thresholds
+  kTooFewPoints,          // a scan has fewer finite points than num_neighbors
+  kTooFewCorrespondences, // fewer than min_correspondences within the distance
+  kDegenerate,            // the system (restricted to the link) is singular
+};
+std::string status_name(GicpStatus status);
+
+struct GicpResult {
+  Mat4 T_target_source = Mat4::Identity();
+  GicpStatus status = GicpStatus::kTooFewPoints;
+  bool converged = false;
+  int iterations = 0;
+  // The next four are from the last linearisation, one update before T_target_source (an
+  // update below the convergence thresholds when converged): no extra correspondence pass.
+  int num_inliers = 0;    // correspondences within max_correspondence_distance_m
+  double rmse_m = 0.0;    // Euclidean RMS of those correspondences' residuals
+  double cost = 0.0;      // the GICP cost (sum of squared Mahalanobis residuals, or Huber)
+  // Gauss-Newton Hessian J^T W J (twist [v; w], target frame, left perturbation; not
+  // projected): the information of T for weighting e_reg.
+  Mat6 information = Mat6::Zero();
+};
+
+// Aligns `source` onto `target` starting from T_init (the tracking prediction).
+GicpResult gicp(const GicpScan& source, const GicpScan& target, const Mat4& T_init,
+                const GicpOptions& options = GicpOptions());
+
+// Convenience: builds both scans with options.num_neighbors, then aligns.
+GicpResult gicp(const Eigen::Ref<const Points3>& source, const Eigen::Ref<const Points3>& target,
+                const Mat4& T_init, const GicpOptions& options = GicpOptions());
+
+}  // namespace twistslam::registration

@@ -1,0 +1,51 @@
+#pragma once
+// Static 3D KD-tree for the k nearest neighbours of object scans (a few hundred to a few
+// thousand points). Built once per scan; queries are read-only and thread-safe.
+#include <cstdint>
+#include <vector>
+
+#include "geometry/types.hpp"
+
+namespace twistslam::registration {
+
+// One neighbour: index into the points the tree was built from, squared distance (m^2).
+struct Neighbor {
+  int index = -1;
+  double squared_distance_m2 = 0.0;
+};
+
+class KdTree {
+ public:
+  KdTree() = default;
+  // Copies the points (no reference to the caller's storage is kept).
+  explicit KdTree(const std::vector<Vec3>& points);
+
+  int size() const { return static_cast<int>(points_.size()); }
+
+  // Up to k neighbours of `query`, nearest first (fewer when the tree holds fewer points).
+  std::vector<Neighbor> knn(const Vec3& query, int k) const;
+  // Same, written into `out` (resized to the number found) to avoid an allocation per query.
+  void knn(const Vec3& query, int k, std::vector<Neighbor>* out) const;
+
+  // The nearest point within sqrt(max_squared_distance_m2); index -1 when there is none.
+  Neighbor nearest(const Vec3& query, double max_squared_distance_m2) const;
+
+ private:
+  // Inner node: points with coordinate `axis` below `split` go to child `first`, the others
+  // to child `second`. Leaf (axis == -1): points [first, second) of the reordered arrays.
+  struct Node {
+    double split = 0.0;
+    int axis = -1;
+    int first = 0;   // inner: left child; leaf: begin
+    int second = 0;  // inner: right child; leaf: end
+  };
+  int build(int begin, int end);
+  void knn_recursive(int node, const Vec3& q, int k, std::vector<Neighbor>* best) const;
+  void nearest_recursive(int node, const Vec3& q, Neighbor* best) const;
+
+  std::vector<Vec3> points_;        // reordered so that each leaf is contiguous
+  std::vector<int> original_index_; // points_[i] was the caller's point original_index_[i]
+  std::vector<Node> nodes_;
+};
+
+}  // namespace twistslam::registration
