@@ -1,0 +1,103 @@
+#include "detection/classify.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace twistslam::detection {
+
+namespace {
+// m, smallest box side given to a person: returns cover only the side facing the sensor, and
+// KITTI pedestrian boxes measure ~0.84 x 0.66 m (training means).
+constexpr double kPersonMinLength = 0.6;
+constexpr double kPersonMinWidth = 0.5;
+// share of the score kept by a box that the prior extended entirely (a single face): such a
+// box is as likely a car, its extent is only less certain.
+constexpr double kUnseenAreaWeight = 0.5;
+
+// KITTI rotation_y of a box whose length axis has direction (dx, dz) in (x, z), in
+// [-pi/2, pi/2): rotation about y by ry maps the object x axis to (cos ry, -sin ry).
+double yaw_of(const BevPoint& d) {
+  double ry = std::atan2(-d.z, d.x);
+  if (ry >= 0.5 * M_PI) ry -= M_PI;
+  if (ry < -0.5 * M_PI) ry += M_PI;
+  return ry;
+}
+
+Detection make_box(const ClusterShape& s, const BevRectangle& r, int length_axis, double height,
+                   ObjectClass cls) {
+  Detection d;
+  const BevPoint c = r.centre();
+  d.centre = Vec3(c.x, -(s.road_up + 0.5 * height), c.z);
+  d.length = r.extent(length_axis);
+  d.width = r.extent(1 - length_axis);
+  d.height = height;
+  d.yaw = yaw_of(r.axis_direction(length_axis));
+  d.cls = cls;
+  d.num_points = s.num_points;
+  return d;
+}
+
+// the car's length axis and its extended footprint, or nullopt if the footprint is no car's
+std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o) {
+  const BevRectangle& f = s.footprint;
+  const int long_axis = f.extent(0) >= f.extent(1) ? 0 : 1;
+  const double long_side = f.extent(long_axis), short_side = f.extent(1 - long_axis);
+  if (s.top_m < o.car_min_height_m || s.top_m > o.car_max_height_m) return std::nullopt;
+  if (long_side < o.car_min_visible_m || long_side > o.car_max_length_m ||
+      short_side > o.car_max_width_m)
+    return std::nullopt;
+  const bool single_face = short_side < o.single_face_m;
+  // one face no wider than a car: its rear or front; the length runs away from the sensor
+  const int length_axis = single_face && long_side <= o.car_max_width_m ? 1 - long_axis : long_axis;
+  if (single_face && length_axis != long_axis && long_side <= o.cyclist_max_length_m &&
+      s.top_m > o.cyclist_min_height_m)
+    return std::nullopt;  // a cyclist seen from the side (see classify)
+  BevRectangle box = f;
+  box.extend_away_from_sensor(length_axis, o.car_length_m);
+  box.extend_away_from_sensor(1 - length_axis, o.car_width_m);
+  Detection d = make_box(s, box, length_axis, s.top_m, ObjectClass::kCar);
+  const double seen = std::min(1.0, f.extent(0) * f.extent(1) / (d.length * d.width));
+  const double fit = std::exp(-f.mean_edge_distance / o.score_edge_distance_m);
+  d.score = fit * (kUnseenAreaWeight + (1.0 - kUnseenAreaWeight) * seen);
+  return d;
+}
+}  // namespace
+
+const char* to_string(ObjectClass cls) {
+  switch (cls) {
+    case ObjectClass::kCar: return "Car";
+    case ObjectClass::kPedestrian: return "Pedestrian";
+    case ObjectClass::kCyclist: return "Cyclist";
+  }
+  return "?";
+}
+
+std::optional<Detection> classify(const ClusterShape& s, const DetectorOptions& o) {
+  if (s.bottom_m > o.max_ground_gap_m || s.num_points <= 0) return std::nullopt;  // floating
+  const double count = 1.0 - std::exp(-s.num_points / o.score_points_scale);
+  std::optional<Detection> d = as_car(s, o);
+  if (!d) {
+    const BevRectangle& f = s.footprint;
+    const int long_axis = f.extent(0) >= f.extent(1) ? 0 : 1;
+    const double long_side = f.extent(long_axis), short_side = f.extent(1 - long_axis);
+    const bool person_height = s.top_m >= o.person_min_height_m && s.top_m <= o.person_max_height_m;
+    if (!person_height || short_side > o.person_max_width_m) return std::nullopt;
+    ObjectClass cls;
+    if (long_side <= o.pedestrian_max_length_m) {
+      cls = ObjectClass::kPedestrian;
+    } else if (long_side <= o.cyclist_max_length_m) {
+      cls = ObjectClass::kCyclist;
+    } else {
+      return std::nullopt;
+    }
+    BevRectangle box = f;
+    box.extend_away_from_sensor(long_axis, kPersonMinLength);
+    box.extend_away_from_sensor(1 - long_axis, kPersonMinWidth);
+    d = make_box(s, box, long_axis, s.top_m, cls);
+    d->score = 1.0;  // a person's footprint has no edges to score
+  }
+  d->score *= count;
+  return d;
+}
+
+}  // namespace twistslam::detection

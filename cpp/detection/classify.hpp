@@ -1,0 +1,38 @@
+#pragma once
+// From a fitted cluster to a detection: class from size and shape (Car, Pedestrian, Cyclist,
+// or rejected), the car-size prior for partial views, and a score in (0, 1].
+#include <cstdint>
+#include <optional>
+
+#include "detection/box_fitting.hpp"
+#include "geometry/types.hpp"
+
+namespace twistslam::detection {
+
+enum class ObjectClass : std::uint8_t { kCar = 0, kPedestrian = 1, kCyclist = 2 };
+
+// KITTI type name: "Car", "Pedestrian", "Cyclist".
+const char* to_string(ObjectClass cls);
+
+// A 3D box in the rectified camera frame c, as python/twistslam/perception/detection.py.
+struct Detection {
+  Vec3 centre = Vec3::Zero();  // m, geometric centre (not KITTI's bottom centre)
+  double length = 0, width = 0, height = 0;  // m, along the heading, across it, vertical
+  double yaw = 0;      // rad, KITTI rotation_y in [-pi/2, pi/2) (a LiDAR cannot tell front from back)
+  double score = 0;    // (0, 1]: point count x fit quality x share of the box seen
+  ObjectClass cls = ObjectClass::kCar;
+  int num_points = 0;  // obstacle returns of the cluster
+};
+
+struct ClusterShape {
+  BevRectangle footprint;  // L-shape fit of the returns
+  double road_up = 0;      // m, road height (up = -y) under the cluster (its lowest cell)
+  double top_m = 0;        // m, highest return above the road
+  double bottom_m = 0;     // m, lowest return above the road
+  int num_points = 0;
+};
+
+// The detection the cluster is, or nullopt (too tall, too big, floating, no class fits).
+std::optional<Detection> classify(const ClusterShape& shape, const DetectorOptions& options);
+
+}  // namespace twistslam::detection

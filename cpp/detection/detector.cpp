@@ -1,0 +1,108 @@
+#include "detection/detector.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "detection/euclidean_clustering.hpp"
+#include "detection/ground_removal.hpp"
+#include "detection/scene_points.hpp"
+
+namespace twistslam::detection {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// m, a detection whose centre lies this close to (or inside) a better-scored car box is a
+// piece of that car: a face seen edge-on leaves isolated columns of returns ~1-2 m apart
+// (one per azimuth step) along the car's far side, inside its prior-extended box or just
+// outside it.
+constexpr double kCarPieceMarginM = 0.3;
+
+bool inside_car(const Detection& car, const Vec3& p, double margin) {
+  // the car's length axis is (cos yaw, -sin yaw) in (x, z), its width axis (sin yaw, cos yaw)
+  const double dx = p.x() - car.centre.x(), dz = p.z() - car.centre.z();
+  const double c = std::cos(car.yaw), s = std::sin(car.yaw);
+  const double along = dx * c - dz * s, across = dx * s + dz * c;
+  return std::abs(along) <= 0.5 * car.length + margin && std::abs(across) <= 0.5 * car.width + margin;
+}
+
+// Detections sorted by decreasing score, without those whose centre lies in a kept car box.
+std::vector<Detection> drop_car_pieces(std::vector<Detection> all) {
+  std::stable_sort(all.begin(), all.end(),
+                   [](const Detection& a, const Detection& b) { return a.score > b.score; });
+  std::vector<Detection> kept;
+  for (const Detection& d : all) {
+    bool piece = false;
+    for (const Detection& k : kept)
+      piece = piece || (k.cls == ObjectClass::kCar && inside_car(k, d.centre, kCarPieceMarginM));
+    if (!piece) kept.push_back(d);
+  }
+  return kept;
+}
+
+ClusterShape shape_of(const std::vector<int>& members, const std::vector<ScenePoint>& pts,
+                      const GroundGrid& ground, const DetectorOptions& o) {
+  ClusterShape s;
+  s.num_points = static_cast<int>(members.size());
+  std::vector<BevPoint> bev;
+  bev.reserve(members.size());
+  // heights relative to the lowest road cell under the cluster: the cell of the road seen
+  // beside the object, not one the envelope raised under its body
+  float road = std::numeric_limits<float>::infinity();
+  float top = -std::numeric_limits<float>::infinity(), low = -top;
+  for (const int i : members) {
+    bev.push_back({pts[i].x, pts[i].z});
+    road = std::min(road, ground.road_at(pts[i].x, pts[i].z));
+    top = std::max(top, pts[i].up);
+    low = std::min(low, pts[i].up);
+  }
+  s.footprint = fit_rectangle(bev, o);
+  s.road_up = road;
+  s.top_m = top - road;
+  s.bottom_m = low - road;
+  return s;
+}
+}  // namespace
+
+DetectorResult detect(const Eigen::Ref<const Points3>& points_c, const DetectorOptions& options) {
+  validate(options);
+  DetectorResult out;
+  auto t = Clock::now();
+  const SceneSelection scene = select_scene_points(points_c, options);
+  out.num_non_finite = scene.num_non_finite;
+  out.num_selected = static_cast<int>(scene.points.size());
+  out.timings.select_ms = ms_since(t);
+
+  t = Clock::now();
+  const GroundGrid ground = estimate_ground(scene.points, options);
+  const std::vector<float> above = height_above_road(scene.points, ground);
+  std::vector<char> obstacle(scene.points.size(), 0);
+  for (std::size_t i = 0; i < above.size(); ++i) {
+    obstacle[i] = above[i] > options.ground_margin_m && above[i] < options.max_object_height_m;
+    out.num_obstacle += obstacle[i];
+  }
+  out.timings.ground_ms = ms_since(t);
+
+  t = Clock::now();
+  const std::vector<std::vector<int>> clusters = cluster_bev(scene.points, obstacle, options);
+  out.num_clusters = static_cast<int>(clusters.size());
+  out.timings.cluster_ms = ms_since(t);
+
+  t = Clock::now();
+  std::vector<Detection> candidates;
+  for (const std::vector<int>& members : clusters) {
+    const ClusterShape shape = shape_of(members, scene.points, ground, options);
+    if (std::optional<Detection> d = classify(shape, options)) candidates.push_back(*d);
+  }
+  out.detections = drop_car_pieces(std::move(candidates));
+  out.timings.fit_ms = ms_since(t);
+  return out;
+}
+
+}  // namespace twistslam::detection

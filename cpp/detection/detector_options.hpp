@@ -1,0 +1,147 @@
+#pragma once
+// Options of the classical LiDAR detector (docs/detection.md), every one with its unit and the
+// reason for its default. Points are in the rectified camera frame c (x right, y down,
+// z forward); "height" below means up = -y, measured from the local ground.
+#include "options/option_range.hpp"
+
+namespace twistslam::detection {
+
+struct DetectorOptions {
+  // --- region of interest ---
+  // keep only points in front of the camera within fov_half_angle_deg of its axis: KITTI
+  // labels (and its evaluation) only cover objects in the left image.
+  bool front_only = true;
+  // deg, half the horizontal field kept when front_only: the KITTI colour camera sees
+  // atan(621 / 721) = 40.7 deg; 45 keeps objects straddling the image border whole.
+  double fov_half_angle_deg = 45.0;
+  // m, horizontal range (sqrt(x^2 + z^2)) below which points are dropped: the ego car's own
+  // body and the HDL-64's near blind zone.
+  double min_range_m = 2.5;
+  // m, horizontal range beyond which points are dropped: a car at 60 m gets < 40 HDL-64
+  // returns, too few for a heading; KITTI's moderate class mostly lies within it.
+  double max_range_m = 60.0;
+
+  // --- ground ---
+  // m, side of the ground grid cells: one road height per cell; 1 m holds ~10 returns of a
+  // ring even at 40 m while a 10 % grade changes by only 0.1 m across it.
+  double ground_cell_m = 1.0;
+  // the k-th lowest return of a cell is its road height: a lone multipath return below the
+  // road (reflections in windows, puddles) must not drag the road down.
+  int ground_rank = 3;
+  // m of height per m of distance: the road height of a cell may not exceed a neighbour's
+  // by more than this (slope-limited lower envelope); roads stay below ~10 % grade, and it
+  // fills cells under cars from the visible road beside them.
+  double max_ground_slope = 0.15;
+  // m above the local road that still counts as road: the HDL-64's ~2 cm noise plus the
+  // grid's slope error across a cell; curbs (~0.15 m) stay on the road side.
+  double ground_margin_m = 0.25;
+  // m above the road beyond which points are ignored: above the tallest class detected (a
+  // 2.2 m van roof), below the tree canopies that would merge the cars parked under them.
+  double max_object_height_m = 2.6;
+
+  // --- clustering ---
+  // m, side of the bird's-eye-view occupancy cells of the clustering
+  double cluster_cell_m = 0.2;
+  // m, the widest gap between returns of one object: cells up to ceil(gap / cell) apart are
+  // neighbours. A face seen at a grazing angle has its returns spread along it: an azimuth
+  // step of 0.09 deg (HDL-64) at 20 m and 10 deg of incidence leaves 0.2 m, 0.2 deg (the
+  // simulator) 0.35 m; 0.6 m still separates cars parked 0.8 m apart.
+  double cluster_gap_m = 0.6;
+  // returns a cluster needs: below 10 no heading or size is measurable.
+  int min_cluster_points = 10;
+
+  // --- box fitting ---
+  // deg, step of the heading search of the L-shape fit over [0, 90) deg: a 1 deg heading
+  // error shifts a 4 m car's corner by 3.5 cm, below the LiDAR's own footprint.
+  double heading_step_deg = 1.0;
+  // m, floor of a point's distance to the nearest rectangle edge in the closeness criterion,
+  // so a few returns exactly on an edge do not dominate. It must stay below the offset a
+  // 2 deg tilt gives along a car's 1.7 m rear (6 cm): 0.05 m picked 2 deg off on a noiseless
+  // rear view, 0.02 m the exact heading; the HDL-64's range noise is ~0.02 m.
+  double closeness_floor_m = 0.02;
+  // returns used by the fit at most (a regular subsample of a larger cluster): a car at
+  // 5 m has ~4000; 400 give the same heading within the step at a tenth of the cost.
+  int max_fit_points = 400;
+
+  // --- the car-size prior (KITTI training label means: l 3.88 m, w 1.63 m, h 1.53 m) ---
+  double car_length_m = 3.9;   // m, a partial view shorter than this is extended to it
+  double car_width_m = 1.65;   // m, idem for the width
+  // m, longest footprint side still taken for a car (vans up to ~5.5 m; buses and walls beyond)
+  double car_max_length_m = 6.0;
+  double car_max_width_m = 2.6;   // m, widest footprint side of a car (2.1 m + mirrors + noise)
+  double car_min_height_m = 1.0;  // m, the lowest car roof above the road (sports cars ~1.1 m)
+  // m, shortest longer footprint side of a car: its narrowest face (the rear, ~1.5 m) partly
+  // occluded; thinner clusters of car height are people.
+  double car_min_visible_m = 1.2;
+  // m, a footprint whose shorter side is below this shows one face only: if its longer side
+  // fits a car's width, it is the rear or front and the car extends away from the sensor.
+  // A face's returns spread ~0.2 m (bumper, curved body), an L of a car is >= 1 m deep.
+  double single_face_m = 0.6;
+  double car_max_height_m = 2.4;  // m, a van roof; taller clusters are trucks, walls, trees
+  // m above the road the lowest return of an object must lie within: cars and people stand on
+  // the road; floating clusters (branches, signs, overhangs) do not.
+  double max_ground_gap_m = 0.7;
+
+  // --- pedestrians and cyclists (KITTI means: pedestrian 0.84 x 0.66 x 1.76 m, cyclist
+  // 1.76 x 0.60 x 1.74 m) ---
+  double person_min_height_m = 1.2;  // m, a child; lower clusters are bushes and bollards
+  double person_max_height_m = 2.05; // m, a tall adult; taller thin clusters are poles, trunks
+  double pedestrian_max_length_m = 1.1;  // m, longest footprint side of a walking person
+  double cyclist_max_length_m = 2.2;     // m, a bicycle is ~1.8 m long
+  double person_max_width_m = 1.0;       // m, shortest footprint side of a person or cyclist
+  // m, a one-face cluster at most cyclist_max_length_m long and taller than this is a
+  // cyclist, not a car's rear: KITTI cyclists average 1.74 m, cars 1.53 m (std 0.14 m).
+  double cyclist_min_height_m = 1.65;
+
+  // --- score ---
+  // returns at which the count term of the score reaches 1 - 1/e: a car at ~25 m.
+  double score_points_scale = 150.0;
+  // m, mean distance of a car's returns to the fitted edges at which the fit term of the score
+  // is 1/e: a clean face measures ~0.05 m, a bush or a merged pair several tenths.
+  double score_edge_distance_m = 0.15;
+};
+
+// Range of every option (inclusive, in the option's unit); the Python bindings and validate()
+// share it.
+template <typename Visit>
+void for_each_option(DetectorOptions& o, Visit&& visit) {
+  visit("front_only", o.front_only, 0, 1);
+  visit("fov_half_angle_deg", o.fov_half_angle_deg, 1.0, 180.0);
+  visit("min_range_m", o.min_range_m, 0.0, 50.0);
+  visit("max_range_m", o.max_range_m, 1.0, 200.0);  // m, 200 m is past any automotive LiDAR
+  visit("ground_cell_m", o.ground_cell_m, 0.1, 10.0);
+  visit("ground_rank", o.ground_rank, 1, 100);
+  visit("max_ground_slope", o.max_ground_slope, 0.0, 2.0);
+  visit("ground_margin_m", o.ground_margin_m, 0.0, 2.0);
+  visit("max_object_height_m", o.max_object_height_m, 0.1, 20.0);
+  visit("cluster_cell_m", o.cluster_cell_m, 0.05, 5.0);  // the grid stays below ~16M cells
+  visit("cluster_gap_m", o.cluster_gap_m, 0.0, 5.0);    // at most 100 cells of reach
+  visit("min_cluster_points", o.min_cluster_points, 3, 1000000);  // 3: a fit needs a shape
+  visit("heading_step_deg", o.heading_step_deg, 0.1, 45.0);
+  visit("closeness_floor_m", o.closeness_floor_m, 0.001, 1.0);
+  visit("max_fit_points", o.max_fit_points, 10, 1000000);
+  visit("car_length_m", o.car_length_m, 0.5, 20.0);
+  visit("car_width_m", o.car_width_m, 0.3, 5.0);
+  visit("car_max_length_m", o.car_max_length_m, 0.5, 30.0);
+  visit("car_max_width_m", o.car_max_width_m, 0.3, 10.0);
+  visit("car_min_height_m", o.car_min_height_m, 0.0, 10.0);
+  visit("car_max_height_m", o.car_max_height_m, 0.1, 20.0);
+  visit("car_min_visible_m", o.car_min_visible_m, 0.0, 20.0);
+  visit("single_face_m", o.single_face_m, 0.0, 10.0);
+  visit("max_ground_gap_m", o.max_ground_gap_m, 0.0, 20.0);
+  visit("person_min_height_m", o.person_min_height_m, 0.0, 10.0);
+  visit("person_max_height_m", o.person_max_height_m, 0.1, 10.0);
+  visit("pedestrian_max_length_m", o.pedestrian_max_length_m, 0.1, 10.0);
+  visit("cyclist_max_length_m", o.cyclist_max_length_m, 0.1, 10.0);
+  visit("person_max_width_m", o.person_max_width_m, 0.1, 10.0);
+  visit("cyclist_min_height_m", o.cyclist_min_height_m, 0.0, 10.0);
+  visit("score_points_scale", o.score_points_scale, 1.0, 1e6);
+  visit("score_edge_distance_m", o.score_edge_distance_m, 0.001, 10.0);
+}
+
+// Throws std::invalid_argument naming the first option out of range, or an inconsistent pair
+// (min_range_m >= max_range_m, a car maximum below its prior, cell sizes that would make a
+// grid of more than ~16M cells).
+void validate(const DetectorOptions& options);
+
+}  // namespace twistslam::detection

@@ -1,0 +1,83 @@
+#pragma once
+// A ray-cast LiDAR scene for the detector tests: a spinning multi-beam sensor at the camera
+// origin of frame c (x right, y down, z forward), a road plane below it (optionally sloped)
+// and upright boxes standing on it. Returns are the nearest hit of every ray, without noise,
+// so every tolerance of the tests is the detector's own error.
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "geometry/types.hpp"
+
+namespace twistslam::test_scenes {
+
+struct SceneBox {
+  double x = 0, z = 0;          // m, footprint centre
+  double length = 4.0, width = 1.7, height = 1.5;  // m
+  double yaw = 0;               // rad, KITTI rotation_y
+  double lift = 0;              // m, gap between the road and the box's bottom
+};
+
+struct SceneRoad {
+  double sensor_height = 1.73;  // m, the KITTI HDL-64 above the road
+  double slope = 0;             // rise (m) of the road per m of z ahead
+};
+
+// m of y (down) of the road at depth z
+inline double road_y(const SceneRoad& road, double z) { return road.sensor_height - road.slope * z; }
+
+// Distance along unit ray d from the origin to box b (standing on `road`), +inf if missed.
+inline double hit_box(const Vec3& d, const SceneBox& b, const SceneRoad& road) {
+  const double c = std::cos(b.yaw), s = std::sin(b.yaw);
+  const double y_bottom = road_y(road, b.z) - b.lift;  // y grows downwards
+  const Vec3 centre(b.x, y_bottom - 0.5 * b.height, b.z);
+  // box axes in frame c: length along (c, 0, -s), width along (s, 0, c), height along y
+  const Vec3 axes[3] = {Vec3(c, 0, -s), Vec3(0, 1, 0), Vec3(s, 0, c)};
+  const double half[3] = {0.5 * b.length, 0.5 * b.height, 0.5 * b.width};
+  double t_in = 0, t_out = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    const double o = -centre.dot(axes[k]), v = d.dot(axes[k]);
+    if (std::abs(v) < 1e-12) {
+      if (std::abs(o) > half[k]) return std::numeric_limits<double>::infinity();
+      continue;
+    }
+    double t0 = (-half[k] - o) / v, t1 = (half[k] - o) / v;
+    if (t0 > t1) std::swap(t0, t1);
+    t_in = std::max(t_in, t0);
+    t_out = std::min(t_out, t1);
+  }
+  return t_in <= t_out && t_in > 0 ? t_in : std::numeric_limits<double>::infinity();
+}
+
+// Scan of the scene: 64 beams from -24.8 to +2 deg elevation (the HDL-64's span), one
+// return every azimuth_step_deg over +-azimuth_span_deg around the z axis, up to 80 m.
+inline Points3 cast_scene(const std::vector<SceneBox>& boxes, const SceneRoad& road = {},
+                          double azimuth_step_deg = 0.2, double azimuth_span_deg = 50.0) {
+  constexpr int kBeams = 64;
+  constexpr double kLowestDeg = -24.8, kHighestDeg = 2.0, kMaxRange = 80.0;
+  std::vector<Vec3> pts;
+  for (int b = 0; b < kBeams; ++b) {
+    const double el = (kLowestDeg + (kHighestDeg - kLowestDeg) * b / (kBeams - 1)) * M_PI / 180.0;
+    for (double az = -azimuth_span_deg; az <= azimuth_span_deg; az += azimuth_step_deg) {
+      const double a = az * M_PI / 180.0;
+      const Vec3 d(std::cos(el) * std::sin(a), -std::sin(el), std::cos(el) * std::cos(a));
+      double t = std::numeric_limits<double>::infinity();
+      // road: y = h - slope z  <=>  t (d.y + slope d.z) = h
+      const double denom = d.y() + road.slope * d.z();
+      if (denom > 1e-9) t = road.sensor_height / denom;
+      for (const SceneBox& box : boxes) t = std::min(t, hit_box(d, box, road));
+      if (t < kMaxRange) pts.push_back(t * d);
+    }
+  }
+  Points3 out(static_cast<Eigen::Index>(pts.size()), 3);
+  for (std::size_t i = 0; i < pts.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+  return out;
+}
+
+// |a - b| modulo pi, in [0, pi/2]: a LiDAR box has no front.
+inline double yaw_error_mod_pi(double a, double b) {
+  double e = std::fmod(std::abs(a - b), M_PI);
+  return std::min(e, M_PI - e);
+}
+
+}  // namespace twistslam::test_scenes
