@@ -14,6 +14,8 @@ void bind_slam_options(py::module_& m);
 void bind_objects(py::module_& m);
 void bind_lidar(py::module_& m);
 void bind_perception(py::module_& m);
+void bind_detection(py::module_& m);
+void bind_registration(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -36,4 +38,8 @@ PYBIND11_MODULE(_core, m) {
   twistslam::bindings::bind_lidar(lidar);
   py::module_ perception = m.def_submodule("perception", "dense optical flow (OpenCV DIS)");
   twistslam::bindings::bind_perception(perception);
+  py::module_ detection = m.def_submodule("detection", "classical LiDAR 3D detection");
+  twistslam::bindings::bind_detection(detection);
+  py::module_ registration = m.def_submodule("registration", "generalized ICP of object scans");
+  twistslam::bindings::bind_registration(registration);
 }
