@@ -181,7 +181,7 @@ def add_eval_detections(sub: argparse._SubParsersAction) -> argparse.ArgumentPar
                         "loose thresholds)")
     p.add_argument("--sampling", default="exact", choices=SAMPLINGS,
                    help="recall sampling: exact (the AP_R40 definition, right on few boxes) "
-                        "or devkit (bit-compatible with the KITTI devkit / OpenPCDet)")
+                        "or devkit (the KITTI devkit's / OpenPCDet's shortcut)")
     p.add_argument("--json", metavar="FILE", help="write every curve and AP as JSON")
     p.set_defaults(handler=run_eval_detections)
     return p

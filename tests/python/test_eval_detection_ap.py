@@ -117,6 +117,28 @@ def test_shifted_box_fails_iou_07_but_passes_05():
 
 
 # ------------------------------------------------------------------ the devkit's rules
+def test_thresholds_come_from_the_highest_scored_candidate():
+    """One car found twice (A listed first, score 0.5; B 0.9) and a false positive at 0.7.
+    The threshold pass credits B, so the only threshold is 0.9: precision 1, recall 1 ->
+    100. Crediting A would put the threshold at 0.5, keeping both duplicates and the false
+    positive: precision 1/3."""
+    gt = _boxes([{"slot": 0}])
+    dets = _boxes([{"slot": 0, "dx": 0.1, "score": 0.5}, {"slot": 0, "score": 0.9},
+                   {"slot": 4, "score": 0.7}])
+    assert _car_ap(gt, dets) == pytest.approx(100.0)
+
+
+def test_counting_takes_the_candidate_of_largest_iou():
+    """Two cars 2 m apart along x; X (listed first, score 0.8) sits between them (IoU 0.6
+    with both), Y (score 0.9) on the first (IoU 3.8/4.2 = 0.90; 1.8/6.2 = 0.29 with the
+    second). At threshold 0.8 the first car takes Y, its largest IoU, and the second X:
+    precision 1 at recall 1 -> 100. Taking the first candidate (X) would leave the second
+    car missed and Y false: 50."""
+    gt = _boxes([{"slot": 0}, {"slot": 0, "dx": 2.0}])
+    dets = _boxes([{"slot": 0, "dx": 1.0, "score": 0.8}, {"slot": 0, "dx": -0.2, "score": 0.9}])
+    assert _car_ap(gt, dets, "bev", iou=0.5) == pytest.approx(100.0)
+
+
 def test_van_and_dont_care_are_ignored_not_false_positives():
     """A car found at score 0.9; higher-scored Car detections on a Van (0.95) and inside a
     DontCare region (0.93) would halve the precision if they counted. The Van match is
@@ -204,11 +226,11 @@ def test_real_tracking_labels_against_themselves(kitti_tracking_lidar):
 
 
 def test_real_pointrcnn_detections_of_0001(kitti_tracking_lidar):
-    """PointRCNN (Shi et al., CVPR 2019) reports on KITTI val about 88 % BEV and 78 % 3D AP
-    for moderate cars at IoU 0.7, and above 95 % at 0.5; sequence 0001 is a city street
-    with parked cars, neither much easier nor harder. A range, not a number: wrong box
-    conventions (bottom vs centre y, yaw sign) would drop 3D@0.7 to about 0, a broken
-    matcher would give 100 or 0."""
+    """PointRCNN (Shi et al., CVPR 2019) reports about 78.6 % 3D AP (R11) for moderate cars
+    at IoU 0.7 on KITTI val, where BEV AP is higher and IoU 0.5 leaves only the misses;
+    sequence 0001 is a city street with parked cars, neither much easier nor harder. A
+    range, not a number: wrong box conventions (bottom vs centre y, yaw sign) would drop
+    3D@0.7 towards 0, a broken matcher would give 100 or 0."""
     labels = read_labels(kitti_tracking_lidar / "training" / "label_02" / "0001.txt")
     dets = read_detections(kitti_tracking_lidar / "detections" / "pointrcnn_car_val" / "0001.txt")
     r = evaluate_detections(labels, dets, classes=("Car",))

@@ -15,7 +15,7 @@ Two samplings (``sampling=``):
 ``"devkit"``
     The devkit's shortcut: at most 41 thresholds picked along recall by
     :func:`~.detection_matching.score_thresholds`, the k-th taken as the point of recall
-    ``k / 40``. Bit-compatible with the devkit (and OpenPCDet's ``AP_R40``), but wrong with
+    ``k / 40``. The devkit's (and OpenPCDet's ``AP_R40``) algorithm, but wrong with
     fewer than about 40 evaluated boxes: perfect detections of 9 boxes score
     ``8 / 40 = 20 %``. On many boxes the two differ by at most one recall point's share
     (up to 2.5 points): the devkit credits a recall just short of ``k / 40`` to point ``k``
