@@ -205,6 +205,8 @@ def test_bad_arguments():
         evaluate_detections({0: "boxes"}, gt)
     with pytest.raises(ValueError, match="sampling"):
         evaluate_detections(gt, gt, sampling="coco")
+    one = evaluate_detections(gt, gt, classes="Car", metrics="bev", difficulties="easy")
+    assert [(c.cls, c.metric, c.difficulty) for c in one.curves] == [("Car", "bev", "easy")] * 2
 
 
 # ------------------------------------------------------------------ real KITTI

@@ -37,8 +37,8 @@ import numpy as np
 
 from ..datasets.objects import ObjectTable
 from .detection_matching import (
-    N_SAMPLE_POINTS, FrameBoxes, detection_states, frame_boxes, frame_counts, frame_overlaps,
-    ground_truth_states, score_thresholds,
+    EVALUATED, N_SAMPLE_POINTS, FrameBoxes, detection_states, frame_boxes, frame_counts,
+    frame_overlaps, ground_truth_states, score_thresholds,
 )
 from .difficulty import DIFFICULTIES
 
@@ -172,7 +172,9 @@ def evaluate_detections(
     -------
     DetectionAPResult
     """
-    classes = list(classes)
+    # a single name is one class / metric / level, not a sequence of letters
+    classes, metrics, difficulties = (
+        [v] if isinstance(v, str) else list(v) for v in (classes, metrics, difficulties))
     _known(sampling, SAMPLINGS, "sampling")
     metrics = [m.lower() for m in metrics]
     for m in metrics:
@@ -242,14 +244,22 @@ def _counts(frames: list[FrameBoxes], min_overlap: float,
     """(K,) TP, FP, FN summed over the frames at each score threshold."""
     totals = np.zeros((len(thresholds), 3), dtype=np.int64)
     for f in frames:
-        if not len(f.det_scores):
-            totals[:, 2] += f.n_evaluated_gt  # nothing detected: every evaluated box missed
-            continue
-        # a frame's counts only change when the threshold passes one of its scores: compute
-        # them once per number of detections kept
+        # a detection overlapping no ground-truth box never matches: when kept it is simply
+        # a false positive (unless ignored or over a DontCare region), counted without
+        # matching -- this leaves the matching to the few detections near objects
+        matchable = (f.overlaps > min_overlap).any(axis=1)
+        idle = ~matchable & (f.det_state == EVALUATED) & ~f.covers_dont_care
+        totals[:, 1] += np.count_nonzero(f.det_scores[idle][None, :] >= thresholds[:, None],
+                                         axis=1)
+        f = f.detections(matchable)
+        # the counts only change when the threshold passes one of the frame's scores:
+        # match once per number of detections kept
         kept = np.count_nonzero(f.det_scores[None, :] >= thresholds[:, None], axis=1)
         for n_kept in np.unique(kept):
             at = kept == n_kept
+            if n_kept == 0:
+                totals[at, 2] += f.n_evaluated_gt  # nothing kept: every evaluated box missed
+                continue
             c = frame_counts(f, min_overlap, score_threshold=thresholds[at][0])
             totals[at] += (c.tp, c.fp, c.fn)
     return totals[:, 0], totals[:, 1], totals[:, 2]

@@ -61,6 +61,12 @@ class FrameBoxes:
         """Recall denominator contributed by this frame."""
         return int(np.count_nonzero(self.gt_state == EVALUATED))
 
+    def detections(self, keep: np.ndarray) -> "FrameBoxes":
+        """The same frame with only the detections ``keep`` (mask or indices), in order."""
+        return FrameBoxes(gt_state=self.gt_state, det_state=self.det_state[keep],
+                          det_scores=self.det_scores[keep], overlaps=self.overlaps[keep],
+                          covers_dont_care=self.covers_dont_care[keep])
+
 
 @dataclass(frozen=True)
 class FrameCounts:
