@@ -116,8 +116,8 @@ def dont_care_cover(det_boxes_2d: np.ndarray, dont_care_2d: np.ndarray,
 
 
 def frame_boxes(gt: ObjectTable, det: ObjectTable, gt_state: np.ndarray,
-                 det_state: np.ndarray, overlaps: np.ndarray, metric: str,
-                 min_overlap: float) -> FrameBoxes:
+                det_state: np.ndarray, overlaps: np.ndarray, metric: str,
+                min_overlap: float) -> FrameBoxes:
     """The rows of one frame that take part (state >= 0), with their overlaps and, in the
     image metric, whether each detection covers a DontCare region."""
     g, d = gt_state >= 0, det_state >= 0
