@@ -68,8 +68,10 @@ struct Linearization {
   int num_inliers = 0;
 };
 
+// `neighbor_of` holds each source point's target neighbour of the previous iteration (-1 =
+// none) and is updated: it seeds the next search, which mostly ends right there.
 Linearization linearize(const GicpScan& source, const GicpScan& target, const Mat4& T,
-                        const GicpOptions& o) {
+                        const GicpOptions& o, std::vector<int>* neighbor_of) {
   Linearization lin;
   const Mat3 R = T.topLeftCorner<3, 3>();
   const Vec3 t = T.topRightCorner<3, 1>();
@@ -79,7 +81,8 @@ Linearization linearize(const GicpScan& source, const GicpScan& target, const Ma
   J.leftCols<3>() = -Mat3::Identity();
   for (std::size_t i = 0; i < source.points.size(); ++i) {
     const Vec3 q = R * source.points[i] + t;
-    const Neighbor nn = target.tree.nearest(q, max_d2);
+    const Neighbor nn = target.tree.nearest(q, max_d2, (*neighbor_of)[i]);
+    (*neighbor_of)[i] = nn.index;
     if (nn.index < 0) continue;
     const Vec3 e = target.points[nn.index] - q;
     const Mat3 C = target.covariances[nn.index] + R * source.covariances[i] * R.transpose();
@@ -122,10 +125,11 @@ GicpResult gicp(const GicpScan& source, const GicpScan& target, const Mat4& T_in
   // those directions get a zero update.
   const Mat6 locked = Mat6::Identity() - Pi;
   Mat4 T = T_init;
+  std::vector<int> neighbor_of(source.points.size(), -1);
   result.status = GicpStatus::kMaxIterations;
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
     result.iterations = iteration;
-    const Linearization lin = linearize(source, target, T, options);
+    const Linearization lin = linearize(source, target, T, options, &neighbor_of);
     result.num_inliers = lin.num_inliers;
     if (lin.num_inliers < options.min_correspondences) {
       result.status = GicpStatus::kTooFewCorrespondences;

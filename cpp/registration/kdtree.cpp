@@ -7,20 +7,28 @@ namespace twistslam::registration {
 
 namespace {
 // Points per leaf: a leaf is scanned linearly, so small leaves cost tree depth and large ones
-// cost distance evaluations. 8 was the fastest of {4, 8, 16, 32} for 1-NN on 500-5000 point
-// car scans (benchmarks/bench_gicp.py timings).
+// distance evaluations. Leaves of 4 to 32 points timed the same within noise for 20-NN and
+// 1-NN on 1000-5000 point car scans (shared 2-core machine); 8 is kept.
 constexpr int kLeafSize = 8;
 }  // namespace
 
-KdTree::KdTree(const std::vector<Vec3>& points) : points_(points) {
-  original_index_.resize(points_.size());
+KdTree::KdTree(const std::vector<Vec3>& points) {
+  original_index_.resize(points.size());
   std::iota(original_index_.begin(), original_index_.end(), 0);
-  if (points_.empty()) return;
-  nodes_.reserve(2 * points_.size() / kLeafSize + 2);
-  build(0, size());
+  if (points.empty()) return;
+  nodes_.reserve(2 * points.size() / kLeafSize + 2);
+  // Build on the index array only (no point copies per level), then lay the points out in
+  // leaf order once.
+  build(points, 0, static_cast<int>(points.size()));
+  points_.resize(points.size());
+  slot_of_.resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    points_[i] = points[original_index_[i]];
+    slot_of_[original_index_[i]] = static_cast<int>(i);
+  }
 }
 
-int KdTree::build(int begin, int end) {
+int KdTree::build(const std::vector<Vec3>& points, int begin, int end) {
   const int id = static_cast<int>(nodes_.size());
   nodes_.push_back(Node{});
   if (end - begin <= kLeafSize) {
@@ -29,30 +37,20 @@ int KdTree::build(int begin, int end) {
     return id;
   }
   // Split the widest extent at its median: balanced depth for any scan shape.
-  Vec3 lo = points_[begin], hi = points_[begin];
+  Vec3 lo = points[original_index_[begin]], hi = lo;
   for (int i = begin + 1; i < end; ++i) {
-    lo = lo.cwiseMin(points_[i]);
-    hi = hi.cwiseMax(points_[i]);
+    lo = lo.cwiseMin(points[original_index_[i]]);
+    hi = hi.cwiseMax(points[original_index_[i]]);
   }
   int axis = 0;
   (hi - lo).maxCoeff(&axis);
   const int mid = begin + (end - begin) / 2;
-  // Sort a permutation, then apply it to points and indices together.
-  std::vector<int> order(end - begin);
-  std::iota(order.begin(), order.end(), begin);
-  std::nth_element(order.begin(), order.begin() + (mid - begin), order.end(),
-                   [&](int a, int b) { return points_[a][axis] < points_[b][axis]; });
-  std::vector<Vec3> p(order.size());
-  std::vector<int> idx(order.size());
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    p[i] = points_[order[i]];
-    idx[i] = original_index_[order[i]];
-  }
-  std::copy(p.begin(), p.end(), points_.begin() + begin);
-  std::copy(idx.begin(), idx.end(), original_index_.begin() + begin);
-  const double split = points_[mid][axis];
-  const int left = build(begin, mid);
-  const int right = build(mid, end);
+  std::nth_element(original_index_.begin() + begin, original_index_.begin() + mid,
+                   original_index_.begin() + end,
+                   [&](int a, int b) { return points[a][axis] < points[b][axis]; });
+  const double split = points[original_index_[mid]][axis];
+  const int left = build(points, begin, mid);
+  const int right = build(points, mid, end);
   nodes_[id].axis = axis;
   nodes_[id].split = split;
   nodes_[id].first = left;
@@ -70,12 +68,16 @@ void KdTree::knn(const Vec3& query, int k, std::vector<Neighbor>* out) const {
   out->clear();
   if (nodes_.empty() || k <= 0) return;
   out->reserve(k);
-  knn_recursive(0, query, k, out);
+  Vec3 offset = Vec3::Zero();
+  knn_recursive(0, query, k, 0.0, &offset, out);
   for (Neighbor& n : *out) n.index = original_index_[n.index];
 }
 
 // `best` is kept sorted by distance (k is small: insertion beats a heap).
-void KdTree::knn_recursive(int node_id, const Vec3& q, int k, std::vector<Neighbor>* best) const {
+// `cell_distance2` is the squared distance from q to the node's cell, `offset` its per-axis
+// parts (Arya & Mount's incremental distance): prunes far better than the split plane alone.
+void KdTree::knn_recursive(int node_id, const Vec3& q, int k, double cell_distance2,
+                           Vec3* offset, std::vector<Neighbor>* best) const {
   const Node& node = nodes_[node_id];
   if (node.axis < 0) {
     for (int i = node.first; i < node.second; ++i) {
@@ -95,20 +97,38 @@ void KdTree::knn_recursive(int node_id, const Vec3& q, int k, std::vector<Neighb
   const double diff = q[node.axis] - node.split;
   const int near_child = diff < 0.0 ? node.first : node.second;
   const int far_child = diff < 0.0 ? node.second : node.first;
-  knn_recursive(near_child, q, k, best);
-  if (static_cast<int>(best->size()) < k || diff * diff < best->back().squared_distance_m2)
-    knn_recursive(far_child, q, k, best);
+  knn_recursive(near_child, q, k, cell_distance2, offset, best);
+  const double old_offset = (*offset)[node.axis];
+  const double far_distance2 = cell_distance2 - old_offset * old_offset + diff * diff;
+  if (static_cast<int>(best->size()) < k || far_distance2 < best->back().squared_distance_m2) {
+    (*offset)[node.axis] = diff;
+    knn_recursive(far_child, q, k, far_distance2, offset, best);
+    (*offset)[node.axis] = old_offset;
+  }
 }
 
 Neighbor KdTree::nearest(const Vec3& query, double max_squared_distance_m2) const {
+  return nearest(query, max_squared_distance_m2, -1);
+}
+
+Neighbor KdTree::nearest(const Vec3& query, double max_squared_distance_m2, int hint) const {
   Neighbor best{-1, max_squared_distance_m2};
   if (nodes_.empty()) return best;
-  nearest_recursive(0, query, &best);
+  // A previous neighbour, still close, bounds the search from the start (exact all the same:
+  // any nearer point is still found).
+  if (hint >= 0 && hint < size()) {
+    const int slot = slot_of_[hint];
+    const double d2 = (points_[slot] - query).squaredNorm();
+    if (d2 < best.squared_distance_m2) best = Neighbor{slot, d2};
+  }
+  Vec3 offset = Vec3::Zero();
+  nearest_recursive(0, query, 0.0, &offset, &best);
   if (best.index >= 0) best.index = original_index_[best.index];
   return best;
 }
 
-void KdTree::nearest_recursive(int node_id, const Vec3& q, Neighbor* best) const {
+void KdTree::nearest_recursive(int node_id, const Vec3& q, double cell_distance2, Vec3* offset,
+                               Neighbor* best) const {
   const Node& node = nodes_[node_id];
   if (node.axis < 0) {
     for (int i = node.first; i < node.second; ++i) {
@@ -120,8 +140,14 @@ void KdTree::nearest_recursive(int node_id, const Vec3& q, Neighbor* best) const
   const double diff = q[node.axis] - node.split;
   const int near_child = diff < 0.0 ? node.first : node.second;
   const int far_child = diff < 0.0 ? node.second : node.first;
-  nearest_recursive(near_child, q, best);
-  if (diff * diff < best->squared_distance_m2) nearest_recursive(far_child, q, best);
+  nearest_recursive(near_child, q, cell_distance2, offset, best);
+  const double old_offset = (*offset)[node.axis];
+  const double far_distance2 = cell_distance2 - old_offset * old_offset + diff * diff;
+  if (far_distance2 < best->squared_distance_m2) {
+    (*offset)[node.axis] = diff;
+    nearest_recursive(far_child, q, far_distance2, offset, best);
+    (*offset)[node.axis] = old_offset;
+  }
 }
 
 }  // namespace twistslam::registration

@@ -29,6 +29,9 @@ class KdTree {
 
   // The nearest point within sqrt(max_squared_distance_m2); index -1 when there is none.
   Neighbor nearest(const Vec3& query, double max_squared_distance_m2) const;
+  // Same, seeded with point `hint` (e.g. the neighbour found at the previous iteration; -1 =
+  // none): the result is identical, the search shorter when the hint is close.
+  Neighbor nearest(const Vec3& query, double max_squared_distance_m2, int hint) const;
 
  private:
   // Inner node: points with coordinate `axis` below `split` go to child `first`, the others
@@ -39,12 +42,15 @@ class KdTree {
     int first = 0;   // inner: left child; leaf: begin
     int second = 0;  // inner: right child; leaf: end
   };
-  int build(int begin, int end);
-  void knn_recursive(int node, const Vec3& q, int k, std::vector<Neighbor>* best) const;
-  void nearest_recursive(int node, const Vec3& q, Neighbor* best) const;
+  int build(const std::vector<Vec3>& points, int begin, int end);
+  void knn_recursive(int node, const Vec3& q, int k, double cell_distance2, Vec3* offset,
+                     std::vector<Neighbor>* best) const;
+  void nearest_recursive(int node, const Vec3& q, double cell_distance2, Vec3* offset,
+                         Neighbor* best) const;
 
   std::vector<Vec3> points_;        // reordered so that each leaf is contiguous
   std::vector<int> original_index_; // points_[i] was the caller's point original_index_[i]
+  std::vector<int> slot_of_;        // inverse of original_index_
   std::vector<Node> nodes_;
 };
 
