@@ -46,10 +46,12 @@ std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o)
   if (long_side < o.car_min_visible_m || long_side > o.car_max_length_m ||
       short_side > o.car_max_width_m)
     return std::nullopt;
-  const bool single_face = short_side < o.single_face_m;
-  // one face no wider than a car: its rear or front; the length runs away from the sensor
-  const int length_axis = single_face && long_side <= o.car_max_width_m ? 1 - long_axis : long_axis;
-  if (single_face && length_axis != long_axis && long_side <= o.cyclist_max_length_m &&
+  // a footprint no longer than a car is wide shows the rear or front (and maybe a sliver of a
+  // side, seen at a grazing angle): the car's length runs across it, away from the sensor.
+  // Longer footprints show a side: both faces of an unoccluded car are seen whole.
+  const bool rear_or_front = long_side <= o.car_max_width_m;
+  const int length_axis = rear_or_front ? 1 - long_axis : long_axis;
+  if (rear_or_front && short_side < o.single_face_m && long_side <= o.cyclist_max_length_m &&
       s.top_m > o.cyclist_min_height_m)
     return std::nullopt;  // a cyclist seen from the side (see classify)
   BevRectangle box = f;

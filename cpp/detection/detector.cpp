@@ -52,8 +52,8 @@ ClusterShape shape_of(const std::vector<int>& members, const std::vector<ScenePo
   s.num_points = static_cast<int>(members.size());
   std::vector<BevPoint> bev;
   bev.reserve(members.size());
-  // heights relative to the lowest road cell under the cluster: the cell of the road seen
-  // beside the object, not one the envelope raised under its body
+  // heights relative to the lowest road bin under the cluster: the road seen beside the
+  // object rather than one that carried a raised height behind it
   float road = std::numeric_limits<float>::infinity();
   float top = -std::numeric_limits<float>::infinity(), low = -top;
   for (const int i : members) {

@@ -27,8 +27,8 @@ void validate(const DetectorOptions& options) {
   const double side = 2.0 * o.max_range_m;
   require(side / o.cluster_cell_m * side / o.cluster_cell_m <= kMaxGridCells,
           "max_range_m / cluster_cell_m gives a clustering grid of more than 16M cells");
-  require(side / o.ground_cell_m * side / o.ground_cell_m <= kMaxGridCells,
-          "max_range_m / ground_cell_m gives a ground grid of more than 16M cells");
+  require(360.0 / o.ground_segment_deg * o.max_range_m / o.ground_cell_m <= kMaxGridCells,
+          "ground_segment_deg and max_range_m / ground_cell_m give a ground grid of more than 16M cells");
 }
 
 }  // namespace twistslam::detection

@@ -21,17 +21,25 @@ struct DetectorOptions {
   // returns, too few for a heading; KITTI's moderate class mostly lies within it.
   double max_range_m = 60.0;
 
-  // --- ground ---
-  // m, side of the ground grid cells: one road height per cell; 1 m holds ~10 returns of a
-  // ring even at 40 m while a 10 % grade changes by only 0.1 m across it.
+  // --- ground (polar grid: azimuth segments x range bins) ---
+  // m, radial length of a road bin: ~10 returns of a ring even at 40 m, while a 10 % grade
+  // changes by only 0.1 m along it.
   double ground_cell_m = 1.0;
-  // the k-th lowest return of a cell is its road height: a lone multipath return below the
-  // road (reflections in windows, puddles) must not drag the road down.
+  // deg, angular width of a road segment: 1 deg is 0.7 m at 40 m, a bin about as wide as long.
+  double ground_segment_deg = 1.0;
+  // the k-th lowest return of a bin is its road height: a lone return below the road
+  // (multipath, puddles) must not drag the road down.
   int ground_rank = 3;
-  // m of height per m of distance: the road height of a cell may not exceed a neighbour's
-  // by more than this (slope-limited lower envelope); roads stay below ~10 % grade, and it
-  // fills cells under cars from the visible road beside them.
+  // m of height per m of range the road may rise or fall between bins: roads stay below
+  // ~10 % grade; 0.15 leaves room for the bins' noise.
   double max_ground_slope = 0.15;
+  // m, extra rise a bin's road may have over the last one: the HDL-64's ~2 cm noise and a
+  // curb's ~0.1 m, but below a car's sill (~0.2-0.3 m), so the road never climbs onto a car.
+  double ground_climb_m = 0.1;
+  // m, extra drop: returns farther below the road so far are multipath (KITTI scans have
+  // returns 10+ m below the road) and ignored; the road ahead may dip behind an object by
+  // up to this.
+  double ground_drop_m = 1.0;
   // m above the local road that still counts as road: the HDL-64's ~2 cm noise plus the
   // grid's slope error across a cell; curbs (~0.15 m) stay on the road side.
   double ground_margin_m = 0.25;
@@ -73,9 +81,9 @@ struct DetectorOptions {
   // m, shortest longer footprint side of a car: its narrowest face (the rear, ~1.5 m) partly
   // occluded; thinner clusters of car height are people.
   double car_min_visible_m = 1.2;
-  // m, a footprint whose shorter side is below this shows one face only: if its longer side
-  // fits a car's width, it is the rear or front and the car extends away from the sensor.
-  // A face's returns spread ~0.2 m (bumper, curved body), an L of a car is >= 1 m deep.
+  // m, a footprint whose shorter side is below this shows one face only (a face's returns
+  // spread ~0.2 m: bumper, curved body); with a cyclist's height, such a face no longer than
+  // cyclist_max_length_m is a cyclist seen from the side rather than a car's rear.
   double single_face_m = 0.6;
   double car_max_height_m = 2.4;  // m, a van roof; taller clusters are trucks, walls, trees
   // m above the road the lowest return of an object must lie within: cars and people stand on
@@ -110,7 +118,10 @@ void for_each_option(DetectorOptions& o, Visit&& visit) {
   visit("min_range_m", o.min_range_m, 0.0, 50.0);
   visit("max_range_m", o.max_range_m, 1.0, 200.0);  // m, 200 m is past any automotive LiDAR
   visit("ground_cell_m", o.ground_cell_m, 0.1, 10.0);
+  visit("ground_segment_deg", o.ground_segment_deg, 0.1, 90.0);
   visit("ground_rank", o.ground_rank, 1, 100);
+  visit("ground_climb_m", o.ground_climb_m, 0.0, 5.0);
+  visit("ground_drop_m", o.ground_drop_m, 0.0, 20.0);
   visit("max_ground_slope", o.max_ground_slope, 0.0, 2.0);
   visit("ground_margin_m", o.ground_margin_m, 0.0, 2.0);
   visit("max_object_height_m", o.max_object_height_m, 0.1, 20.0);

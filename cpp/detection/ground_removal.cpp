@@ -2,79 +2,107 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace twistslam::detection {
 
 namespace {
-constexpr float kUnknown = std::numeric_limits<float>::infinity();
+constexpr float kUnknown = -std::numeric_limits<float>::infinity();
+// m, returns within this range of the sensor give the starting road height: at the HDL-64's
+// lower beams (2.5-10 m) most of what the sensor sees around itself is road.
+constexpr double kNearRoadRangeM = 10.0;
 
-// One chamfer sweep of the lower envelope: each cell takes the smaller of its height and a
-// visited neighbour's plus the slope cost of the step. `forward` visits rows and columns in
-// increasing order (neighbours above / left), else in decreasing order.
-void envelope_sweep(GroundGrid& g, float step_cost, float diagonal_cost, bool forward) {
-  const int rows = g.rows, cols = g.cols, d = forward ? -1 : 1;
-  for (int k = 0; k < rows; ++k) {
-    const int r = forward ? k : rows - 1 - k;
-    for (int m = 0; m < cols; ++m) {
-      const int c = forward ? m : cols - 1 - m;
-      float best = g.road_up[r * cols + c];
-      const int rn = r + d, cn = c + d;
-      if (cn >= 0 && cn < cols) best = std::min(best, g.road_up[r * cols + cn] + step_cost);
-      if (rn >= 0 && rn < rows) {
-        best = std::min(best, g.road_up[rn * cols + c] + step_cost);
-        if (c - 1 >= 0) best = std::min(best, g.road_up[rn * cols + c - 1] + diagonal_cost);
-        if (c + 1 < cols) best = std::min(best, g.road_up[rn * cols + c + 1] + diagonal_cost);
-      }
-      g.road_up[r * cols + c] = best;
-    }
-  }
+int cell_of(const GroundGrid& g, double x, double z) {
+  const double r = std::sqrt(x * x + z * z);
+  const int b = static_cast<int>(r / g.bin_m);
+  int s = static_cast<int>((std::atan2(x, z) + M_PI) / g.segment_rad);
+  if (s >= g.segments) s = g.segments - 1;  // atan2 == pi exactly
+  if (b < 0 || b >= g.bins || s < 0) return -1;
+  return s * g.bins + b;
+}
+
+// k-th lowest of `values` (k >= 1), or the highest if fewer
+float kth_lowest(std::vector<float>& values, int k) {
+  const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(k), values.size()) - 1;
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(n), values.end());
+  return values[n];
 }
 }  // namespace
 
 float GroundGrid::road_at(double x, double z) const {
-  const int c = static_cast<int>(std::floor((x - x0) / cell_m));
-  const int r = static_cast<int>(std::floor((z - z0) / cell_m));
-  if (c < 0 || c >= cols || r < 0 || r >= rows) return kUnknown;
-  return road_up[static_cast<std::size_t>(r) * cols + c];
+  if (road_up.empty()) return kUnknown;
+  const int cell = cell_of(*this, x, z);
+  return cell < 0 ? kUnknown : road_up[static_cast<std::size_t>(cell)];
 }
 
 GroundGrid estimate_ground(const std::vector<ScenePoint>& points, const DetectorOptions& o) {
   GroundGrid g;
-  g.cell_m = o.ground_cell_m;
-  // a square of half-side max_range_m around the sensor holds every selected point
-  g.cols = g.rows = static_cast<int>(std::ceil(2.0 * o.max_range_m / g.cell_m)) + 1;
-  g.x0 = g.z0 = -0.5 * g.cols * g.cell_m;
-  const std::size_t cells = static_cast<std::size_t>(g.cols) * g.rows;
-  const int k = o.ground_rank;
-  // the k lowest heights of each cell, ascending (insertion into a k-slot list)
-  std::vector<float> lowest(cells * k, kUnknown);
-  std::vector<int> count(cells, 0);
-  for (const ScenePoint& p : points) {
-    const int c = static_cast<int>(std::floor((p.x - g.x0) / g.cell_m));
-    const int r = static_cast<int>(std::floor((p.z - g.z0) / g.cell_m));
-    if (c < 0 || c >= g.cols || r < 0 || r >= g.rows) continue;
-    const std::size_t cell = static_cast<std::size_t>(r) * g.cols + c;
-    ++count[cell];
-    float* slots = &lowest[cell * k];
-    if (p.up >= slots[k - 1]) continue;
-    int j = k - 1;
-    for (; j > 0 && slots[j - 1] > p.up; --j) slots[j] = slots[j - 1];
-    slots[j] = p.up;
+  g.bin_m = o.ground_cell_m;
+  g.segments = std::max(1, static_cast<int>(std::ceil(360.0 / o.ground_segment_deg - 1e-9)));
+  g.segment_rad = 2.0 * M_PI / g.segments;
+  g.bins = static_cast<int>(std::ceil(o.max_range_m / g.bin_m)) + 1;
+  if (points.empty()) return g;
+  const std::size_t cells = static_cast<std::size_t>(g.segments) * g.bins;
+  // counting sort of the heights by cell
+  std::vector<int> start(cells + 1, 0), cell(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    cell[i] = cell_of(g, points[i].x, points[i].z);
+    if (cell[i] >= 0) ++start[static_cast<std::size_t>(cell[i]) + 1];
   }
-  g.road_up.assign(cells, kUnknown);
-  for (std::size_t cell = 0; cell < cells; ++cell)
-    if (count[cell] >= k) g.road_up[cell] = lowest[cell * k + k - 1];
-  const float step = static_cast<float>(o.max_ground_slope * g.cell_m);
-  const float diagonal = static_cast<float>(o.max_ground_slope * g.cell_m * M_SQRT2);
-  envelope_sweep(g, step, diagonal, true);
-  envelope_sweep(g, step, diagonal, false);
+  for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+  std::vector<float> heights(static_cast<std::size_t>(start[cells]));
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (cell[i] >= 0) heights[static_cast<std::size_t>(fill[cell[i]]++)] = points[i].up;
+
+  // starting road height: median of the bins' k-th lowest returns near the sensor
+  std::vector<float> near, bin_values;
+  const int near_bins = std::min(g.bins, static_cast<int>(kNearRoadRangeM / g.bin_m) + 1);
+  for (int s = 0; s < g.segments; ++s) {
+    for (int b = 0; b < near_bins; ++b) {
+      const int c = s * g.bins + b;
+      if (start[c + 1] - start[c] < o.ground_rank) continue;
+      bin_values.assign(heights.begin() + start[c], heights.begin() + start[c + 1]);
+      near.push_back(kth_lowest(bin_values, o.ground_rank));
+    }
+  }
+  if (near.empty()) {  // nothing near the sensor: the lowest returns anywhere
+    bin_values = heights;
+    near.push_back(kth_lowest(bin_values, std::max(1, static_cast<int>(heights.size() / 20))));
+  }
+  const float start_up = kth_lowest(near, static_cast<int>(near.size() / 2) + 1);
+
+  g.road_up.assign(cells, start_up);
+  for (int s = 0; s < g.segments; ++s) {
+    float road = start_up;
+    double road_r = 0.0;  // m, range of the last bin that measured the road
+    for (int b = 0; b < g.bins; ++b) {
+      const int c = s * g.bins + b;
+      const double r = (b + 0.5) * g.bin_m;
+      const double rise = o.max_ground_slope * (r - road_r);
+      const float lowest_ok = static_cast<float>(road - rise - o.ground_drop_m);
+      bin_values.clear();
+      for (int i = start[c]; i < start[c + 1]; ++i)
+        if (heights[static_cast<std::size_t>(i)] >= lowest_ok) bin_values.push_back(heights[static_cast<std::size_t>(i)]);
+      // a bin a ring only grazes holds fewer than k returns: its highest then (the band
+      // test above already dropped returns far below the road)
+      if (!bin_values.empty()) {
+        const float candidate = kth_lowest(bin_values, o.ground_rank);
+        if (candidate <= road + rise + o.ground_climb_m) {
+          road = candidate;
+          road_r = r;
+        }
+      }
+      g.road_up[static_cast<std::size_t>(c)] = road;
+    }
+  }
   return g;
 }
 
 std::vector<float> height_above_road(const std::vector<ScenePoint>& points, const GroundGrid& grid) {
   std::vector<float> out(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
-    out[i] = points[i].up - grid.road_at(points[i].x, points[i].z);  // inf road -> -inf
+    out[i] = points[i].up - grid.road_at(points[i].x, points[i].z);  // -inf road -> +inf
   return out;
 }
 

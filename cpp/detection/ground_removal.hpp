@@ -1,12 +1,12 @@
 #pragma once
-// Road height under every point from a grid of the scan's lowest returns, robust to slopes:
-// each cell's road height is its k-th lowest return, then the grid is replaced by its
-// slope-limited lower envelope  g(c) = min_n low(n) + max_slope * |c - n|  (two chamfer
-// passes). Cells the road is hidden in (under a car, behind it) inherit the height of the
-// visible road nearby plus at most max_slope per metre; an object's returns, all above its
-// own road, never lift the road. Points more than ground_margin_m above their cell's road
-// are obstacles.
-#include <limits>
+// Road height under every point, on a polar grid (azimuth segments x range bins around the
+// sensor), robust to slopes and to returns below the road. The road starts at the median
+// height of the lowest returns near the sensor; each segment is then walked outwards: a bin's
+// k-th lowest return (among those not far below the road so far) is the road there if it
+// rises at most max_ground_slope per m (+ ground_climb_m) and drops at most ground_drop_m
+// (+ the slope) from the last road bin; else the bin keeps the last road height. Objects
+// (higher) never lift the road; multipath returns metres below it (KITTI scans have some)
+// never pull it down.
 #include <vector>
 
 #include "detection/scene_points.hpp"
@@ -14,22 +14,21 @@
 namespace twistslam::detection {
 
 struct GroundGrid {
-  double cell_m = 1.0;       // m, side of a cell
-  double x0 = 0, z0 = 0;     // m, corner of cell (0, 0)
-  int cols = 0, rows = 0;    // cells along x and z
-  // m, road height (up) per cell, row-major (row = z); +inf where no road was seen within
-  // reach (an empty scan).
+  double bin_m = 1.0;        // m, radial length of a bin
+  double segment_rad = 0.0;  // rad, angular width of a segment
+  int segments = 0, bins = 0;
+  // m, road height (up) per (segment, bin), row-major by segment; -inf for an empty scan
   std::vector<float> road_up;
 
-  // Road height (up, m) at (x, z); +inf outside the grid or where unknown.
+  // Road height (up, m) at (x, z); -inf outside the grid or for an empty scan.
   float road_at(double x, double z) const;
 };
 
 // The road grid of `points` (see the file comment); options must be valid.
 GroundGrid estimate_ground(const std::vector<ScenePoint>& points, const DetectorOptions& options);
 
-// Height above the road (m) of every point, in the order of `points`; -inf where the road is
-// unknown (no cell had ground_rank returns: such points are never obstacles).
+// Height above the road (m) of every point, in the order of `points`; +inf where the road is
+// unknown (an empty road: such points are never obstacles, being above max_object_height_m).
 std::vector<float> height_above_road(const std::vector<ScenePoint>& points, const GroundGrid& grid);
 
 }  // namespace twistslam::detection

@@ -2,6 +2,9 @@
 (optical flow and panoptic segmentation), each with interchangeable sources. Not yet wired
 into :func:`twistslam.run` (issue 10)."""
 
+from .detection import DETECTION_KINDS, Detections3D, DetectionStage, detection_source
+from .detection_classical import ClassicalDetector
+from .detection_files import FileDetections, read_detection_file
 from .flow import DisFlow, DisOptions, FileFlow, flow_source
 from .flow_files import read_flo, read_kitti_flow, write_flo, write_kitti_flow
 from .flow_raft import RaftFlow, load_raft
@@ -12,7 +15,9 @@ from .panoptic_source import PanopticStage, check_panoptic, panoptic_source
 from .panoptic_torch import TorchPanoptic
 from .stage import FlowStage, TimedStage, check_flow
 
-__all__ = ["DisFlow", "DisOptions", "FileFlow", "FlowStage", "RaftFlow", "TimedStage", "check_flow",
+__all__ = ["ClassicalDetector", "DETECTION_KINDS", "Detections3D", "DetectionStage",
+           "FileDetections", "detection_source", "read_detection_file",
+           "DisFlow", "DisOptions", "FileFlow", "FlowStage", "RaftFlow", "TimedStage", "check_flow",
            "flow_source", "load_raft", "read_flo", "read_kitti_flow", "write_flo", "write_kitti_flow",
            "BoxMaskConfig", "CITYSCAPES_CLASSES", "CocoPanopticFiles", "DEFAULT_DYNAMIC_CLASSES",
            "Panoptic", "PanopticFromBoxes", "PanopticStage", "SimPanopticFiles", "check_panoptic",

@@ -2,16 +2,26 @@
 
 A detection stage is any callable ``detect(frame) -> Detections3D`` from a
 :class:`~twistslam.datasets.Frame` (its LiDAR scan ``points_c``, in the rectified camera
-frame) to boxes in that same camera frame. Built-in sources: precomputed files, the classical
-LiDAR detector of the C++ core (the default without weights) and 3DSSD in torch.
+frame) to boxes in that same camera frame. Built-in sources (:func:`detection_source`):
+precomputed files (:class:`~twistslam.perception.detection_files.FileDetections`), the
+classical LiDAR detector of the C++ core, the default without weights
+(:class:`~twistslam.perception.detection_classical.ClassicalDetector`) and 3DSSD in torch
+(``Detector3DSSD``, imported only when asked for). See ``docs/detection.md``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
+
+if TYPE_CHECKING:  # datasets imports nothing from perception: no cycle at run time either
+    from twistslam.datasets import Calibration, ObjectTable
+
+#: the names :func:`detection_source` accepts
+DETECTION_KINDS = ("auto", "files", "classical", "3dssd")
 
 
 @dataclass
@@ -46,9 +56,91 @@ class Detections3D:
     def __len__(self) -> int:
         return len(self.boxes)
 
+    def select(self, mask_or_index) -> "Detections3D":
+        """The detections picked by a boolean mask or an index array."""
+        return Detections3D(self.boxes[mask_or_index], self.scores[mask_or_index],
+                            self.classes[mask_or_index])
+
+    @classmethod
+    def from_table(cls, table: "ObjectTable") -> "Detections3D":
+        """The boxes of an :class:`~twistslam.datasets.ObjectTable` (one frame's rows; the
+        table's ``box_3d`` already has the geometric centre). DontCare rows are left out."""
+        keep = table.cls != "DontCare"
+        return cls(table.box_3d[keep], table.score[keep], table.cls[keep].astype(object))
+
+    def to_table(self, frame: int, calib: "Calibration | None" = None,
+                 image_size: tuple[int, int] | None = None) -> "ObjectTable":
+        """These detections as an :class:`~twistslam.datasets.ObjectTable` of ``frame``.
+
+        ``alpha`` (the observation angle) is ``yaw - atan2(x, z)``; with ``calib`` the image
+        boxes are the boxes projected by ``P2`` (clipped to ``image_size = (width, height)``
+        when given), else -1. Boxes wholly behind the camera get image box -1 too.
+        """
+        from twistslam.datasets import ObjectTable
+        from twistslam.geometry import project_boxes
+
+        n = len(self)
+        x, z, yaw = self.boxes[:, 0], self.boxes[:, 2], self.boxes[:, 6]
+        alpha = np.angle(np.exp(1j * (yaw - np.arctan2(x, z))))  # wrapped to (-pi, pi]
+        box_2d = np.full((n, 4), -1.0)
+        if calib is not None and n:
+            width, height = image_size if image_size is not None else (0, 0)
+            projected = project_boxes(self.boxes, calib.P2, int(width), int(height))
+            seen = np.isfinite(projected).all(axis=1)
+            box_2d[seen] = projected[seen]
+        return ObjectTable(frame=np.full(n, int(frame)), track_id=np.full(n, -1),
+                           cls=self.classes.astype(str), truncation=np.full(n, -1.0),
+                           occlusion=np.full(n, -1), alpha=alpha, box_2d=box_2d,
+                           box_3d=self.boxes, score=self.scores)
+
 
 @runtime_checkable
 class DetectionStage(Protocol):
     """3D detection of one frame: ``detect(frame) -> Detections3D`` (boxes in frame c)."""
 
     def __call__(self, frame) -> Detections3D: ...
+
+
+def detection_source(kind: str = "auto", *, path: str | Path | None = None,
+                     weights: str | Path | None = None, options: dict[str, Any] | None = None,
+                     missing_frames: str = "error") -> DetectionStage:
+    """The detection stage of ``kind``.
+
+    Parameters
+    ----------
+    kind : "auto", "files", "classical" or "3dssd"
+        "auto": files when ``path`` is given, else 3DSSD when ``weights`` is given, else the
+        classical detector.
+    path : a detection file or folder for "files": a PointRCNN comma file, a KITTI tracking
+        result file (one file, every frame) or a KITTI object result folder (NNNNNN.txt per
+        frame).
+    weights : the 3DSSD checkpoint ("3dssd" requires it).
+    options : options of the classical detector (``twistslam._core.detection.default_options``).
+    missing_frames : "error" (default) or "empty": what a KITTI object result folder without
+        the frame's file gives. A frame absent from a one-file source has no detections.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``kind``, "files" without ``path``, "3dssd" without ``weights``, or bad
+        classical options.
+    """
+    if kind not in DETECTION_KINDS:
+        raise ValueError(f"detection source '{kind}': expected one of {', '.join(DETECTION_KINDS)}")
+    if kind == "auto":
+        kind = "files" if path is not None else "3dssd" if weights is not None else "classical"
+    if kind == "files":
+        if path is None:
+            raise ValueError("detection source 'files': needs path (a detection file or folder)")
+        from .detection_files import FileDetections
+
+        return FileDetections(path, missing_frames=missing_frames)
+    if kind == "3dssd":
+        if weights is None:
+            raise ValueError("detection source '3dssd': needs weights (a 3DSSD checkpoint file)")
+        from .detector_3dssd import Detector3DSSD  # torch: imported only when asked for
+
+        return Detector3DSSD(weights)
+    from .detection_classical import ClassicalDetector
+
+    return ClassicalDetector(options)

@@ -1,0 +1,147 @@
+"""Speed and quality of the classical LiDAR detector (docs/detection.md).
+
+    .venv/bin/python benchmarks/bench_detection.py [--data DIR] [--repeats 5]
+        [--sim .cache/sim/urban-seed0-n100 --frames 100] [--set KEY=VALUE ...]
+
+Real KITTI object frames (``--data``, default ``$TWISTSLAM_DATA/kitti_object``; ~120k points
+per scan): median wall ms per scan of the whole detector and of each stage (region of
+interest, road, clustering, fit + classes), ``--repeats`` runs per frame; then, against
+``label_2`` Cars, recall and precision at BEV IoU 0.5 and 0.7 (greedy matching by score, a
+detection on a Van or DontCare box is neither right nor wrong), for labels within 30 m and
+within the detector's range. ``--sim ROOT`` adds the same table on a simulated KITTI-layout
+sequence (its ``label_02/0000.txt``) plus the median yaw (mod pi) and size errors of the
+matched cars. The time includes the float32 -> float64 conversion of the scan.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from twistslam._core import detection as _d
+from twistslam.datasets import KittiObject, KittiTracking, data_root
+from twistslam.geometry import box_iou_bev
+
+RANGES_M = (30.0, 60.0)  # m, label ranges the table reports (horizontal distance)
+IOUS = (0.5, 0.7)        # BEV IoU thresholds: the loose and the strict KITTI Car thresholds
+IGNORED = ("Van", "DontCare")
+
+
+def greedy_match(det_boxes, det_scores, gt_boxes, iou_threshold):
+    """Index of the matched label of every detection (-1: none), best score first."""
+    match = np.full(len(det_boxes), -1)
+    if not len(det_boxes) or not len(gt_boxes):
+        return match
+    iou = box_iou_bev(det_boxes, gt_boxes)
+    taken = np.zeros(len(gt_boxes), bool)
+    for i in np.argsort(-det_scores, kind="stable"):
+        candidates = np.where(taken, -1.0, iou[i])
+        j = int(np.argmax(candidates))
+        if candidates[j] >= iou_threshold:
+            match[i], taken[j] = j, True
+    return match
+
+
+def score_frame(out: dict, labels, max_range: float, iou: float, stats: dict) -> None:
+    """Adds one frame's counts (true / false positives, labels) to ``stats``."""
+    dist = np.hypot(labels.box_3d[:, 0], labels.box_3d[:, 2])
+    cars = (labels.cls == "Car") & (dist <= max_range)
+    ignored = np.isin(labels.cls, IGNORED) | ((labels.cls == "Car") & ~cars)
+    is_car = np.array([c == "Car" for c in out["classes"]], bool)
+    boxes, scores = out["boxes"][is_car], out["scores"][is_car]
+    in_range = np.hypot(boxes[:, 0], boxes[:, 2]) <= max_range
+    boxes, scores = boxes[in_range], scores[in_range]
+    gt = labels.box_3d[cars | ignored]
+    matched = greedy_match(boxes, scores, gt, iou)
+    is_gt_car = cars[cars | ignored]
+    hit = matched >= 0
+    tp = int(np.sum(is_gt_car[matched[hit]]))
+    on_ignored = int(np.sum(~is_gt_car[matched[hit]]))
+    stats["tp"] += tp
+    stats["dets"] += len(boxes) - on_ignored
+    stats["labels"] += int(cars.sum())
+    for i in np.flatnonzero(matched >= 0):
+        g = gt[matched[i]]
+        if is_gt_car[matched[i]]:
+            e = abs(boxes[i, 6] - g[6]) % np.pi
+            stats["yaw_err"].append(np.degrees(min(e, np.pi - e)))
+            stats["size_err"].append(np.abs(boxes[i, 3:6] - g[3:6]))
+
+
+def quality_table(frames, options: dict) -> None:
+    """Recall / precision rows for every (range, IoU), over (points_c, labels) pairs."""
+    runs = [(_d.detect(points, options), labels) for points, labels in frames]
+    print(f"{'labels within':>13} {'BEV IoU':>7} {'labels':>6} {'dets':>5} {'recall':>6} "
+          f"{'precision':>9} {'yaw err':>7} {'|dl| |dw| |dh| (m, median)':>27}")
+    for max_range in RANGES_M:
+        for iou in IOUS:
+            stats = {"tp": 0, "dets": 0, "labels": 0, "yaw_err": [], "size_err": []}
+            for out, labels in runs:
+                score_frame(out, labels, max_range, iou, stats)
+            recall = stats["tp"] / max(stats["labels"], 1)
+            precision = stats["tp"] / max(stats["dets"], 1)
+            yaw = np.median(stats["yaw_err"]) if stats["yaw_err"] else float("nan")
+            size = np.median(stats["size_err"], axis=0) if stats["size_err"] else [np.nan] * 3
+            print(f"{max_range:>11.0f} m {iou:>7.1f} {stats['labels']:>6} {stats['dets']:>5} "
+                  f"{recall:>6.2f} {precision:>9.2f} {yaw:>5.1f} d "
+                  f"{size[0]:>9.2f} {size[1]:>5.2f} {size[2]:>5.2f}")
+
+
+def timing_table(scans, options: dict, repeats: int) -> None:
+    total, stages = [], {"select_ms": [], "ground_ms": [], "cluster_ms": [], "fit_ms": []}
+    for points in scans:
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            out = _d.detect(points, options)
+            total.append((time.perf_counter() - t0) * 1e3)
+            for k in stages:
+                stages[k].append(out["timings"][k])
+    n = np.median([len(s) for s in scans])
+    print(f"median ms per scan ({len(scans)} scans, median {n:.0f} points, {repeats} runs each, "
+          f"load {os.getloadavg()[0]:.2f}): whole {np.median(total):.2f} ms "
+          f"(p90 {np.percentile(total, 90):.2f}); "
+          + ", ".join(f"{k[:-3]} {np.median(v):.2f}" for k, v in stages.items()))
+
+
+def _setting(text: str):
+    key, _, value = text.partition("=")
+    for convert in (int, float):
+        try:
+            return key, convert(value)
+        except ValueError:
+            pass
+    return key, value.lower() == "true"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data", type=Path, help="KITTI object root (default: data root / kitti_object)")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--sim", type=Path, help="simulated KITTI tracking root (sequence 0000)")
+    parser.add_argument("--frames", type=int, default=100, help="simulated frames used")
+    parser.add_argument("--set", dest="settings", action="append", type=_setting, default=[],
+                        metavar="KEY=VALUE", help="detector option")
+    args = parser.parse_args()
+    options = dict(args.settings)
+    root = args.data or data_root() / "kitti_object"
+    ds = KittiObject(root)
+    real = [ds.frame(i, image=False) for i in ds.ids]
+    scans = [np.ascontiguousarray(f.points_c[:, :3], dtype=np.float64) for f in real]
+    print(f"== real KITTI object frames ({root})")
+    timing_table([f.points_c for f in real], options, args.repeats)
+    quality_table([(s, f.objects_gt) for s, f in zip(scans, real)], options)
+    if args.sim:
+        seq = KittiTracking(args.sim, "0000")
+        n = min(args.frames, len(seq))
+        frames = [seq[i] for i in range(n)]
+        print(f"== simulated {args.sim} ({n} frames)")
+        timing_table([f.points_c for f in frames[:10]], options, args.repeats)
+        quality_table([(f.points_c, f.objects_gt) for f in frames], options)
+
+
+if __name__ == "__main__":
+    main()
