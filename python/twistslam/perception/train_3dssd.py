@@ -33,6 +33,8 @@ SCALE_RANGE = (0.95, 1.05)
 LEARNING_RATE = 2e-3
 #: the cosine schedule ends at this fraction of the initial rate
 FINAL_LR_FRACTION = 0.05
+#: training steps between two progress lines in the log
+LOG_EVERY_STEPS = 50
 #: object types that are neither targets nor background: points inside carry no loss
 DONT_CARE = "DontCare"
 
@@ -125,8 +127,11 @@ def train_model(model, samples: list[Sample], epochs: int, batch_size: int = 2, 
     torch.manual_seed(seed)
     optimiser = torch.optim.Adam(model.parameters(), lr=lr)
     steps = epochs * math.ceil(len(samples) / batch_size)
-    schedule = torch.optim.lr_scheduler.LambdaLR(
-        optimiser, lambda step: FINAL_LR_FRACTION + (1 - FINAL_LR_FRACTION) * 0.5 * (1 + math.cos(math.pi * step / steps)))
+
+    def cosine(step: int) -> float:
+        return FINAL_LR_FRACTION + (1 - FINAL_LR_FRACTION) * 0.5 * (1 + math.cos(math.pi * step / steps))
+
+    schedule = torch.optim.lr_scheduler.LambdaLR(optimiser, cosine)
     history = []
     for epoch in range(epochs):
         model.train()
@@ -144,6 +149,10 @@ def train_model(model, samples: list[Sample], epochs: int, batch_size: int = 2, 
             schedule.step()
             for key, value in losses.items():
                 sums[key] = sums.get(key, 0.0) + value.item() * len(targets)
+            step = begin // batch_size + 1
+            if step % LOG_EVERY_STEPS == 0:
+                log.info("epoch %d step %d: total %.3f (%.1f s/step)", epoch + 1, step,
+                         losses["total"].item(), (time.monotonic() - started) / step)
         means = {key: value / len(samples) for key, value in sums.items()}
         history.append(means)
         log.info("epoch %d/%d: %s (%.0f s)", epoch + 1, epochs,

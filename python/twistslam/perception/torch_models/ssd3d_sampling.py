@@ -82,7 +82,8 @@ def gather_features(features: torch.Tensor, index: torch.Tensor) -> torch.Tensor
 
 
 @torch.no_grad()
-def ball_query(xyz: torch.Tensor, centres: torch.Tensor, radius: float, samples: int) -> tuple[torch.Tensor, torch.Tensor]:
+def ball_query(xyz: torch.Tensor, centres: torch.Tensor, radius: float,
+               samples: int) -> tuple[torch.Tensor, torch.Tensor]:
     """Up to ``samples`` points of ``xyz`` (B, N, 3) within ``radius`` of each centre
     (B, M, 3), lowest indices first (as the CUDA op of PointNet++ does).
 
