@@ -47,10 +47,16 @@ std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o)
       short_side > o.car_max_width_m)
     return std::nullopt;
   // a footprint no longer than a car is wide shows the rear or front (and maybe a sliver of a
-  // side, seen at a grazing angle): the car's length runs across it, away from the sensor.
-  // Longer footprints show a side: both faces of an unoccluded car are seen whole.
+  // side, seen at a grazing angle): the car's length runs away from the sensor, along the
+  // footprint's axis nearer the line of sight. Longer footprints show a side: both faces of
+  // an unoccluded car are seen whole.
   const bool rear_or_front = long_side <= o.car_max_width_m;
-  const int length_axis = rear_or_front ? 1 - long_axis : long_axis;
+  int length_axis = long_axis;
+  if (rear_or_front) {  // the length is the axis nearer the line of sight
+    const BevPoint centre = f.centre(), a = f.axis_direction(long_axis);
+    const double along_ray = std::abs(a.x * centre.x + a.z * centre.z) / std::hypot(centre.x, centre.z);
+    length_axis = along_ray > M_SQRT1_2 ? long_axis : 1 - long_axis;
+  }
   if (rear_or_front && short_side < o.single_face_m && long_side <= o.cyclist_max_length_m &&
       s.top_m > o.cyclist_min_height_m)
     return std::nullopt;  // a cyclist seen from the side (see classify)

@@ -57,10 +57,15 @@ ClusterShape shape_of(const std::vector<int>& members, const std::vector<ScenePo
   float road = std::numeric_limits<float>::infinity();
   float top = -std::numeric_limits<float>::infinity(), low = -top;
   for (const int i : members) {
-    bev.push_back({pts[i].x, pts[i].z});
     road = std::min(road, ground.road_at(pts[i].x, pts[i].z));
     top = std::max(top, pts[i].up);
     low = std::min(low, pts[i].up);
+  }
+  for (const int i : members)
+    if (pts[i].up - road <= o.footprint_max_height_m) bev.push_back({pts[i].x, pts[i].z});
+  if (static_cast<int>(bev.size()) < o.min_cluster_points) {
+    bev.clear();
+    for (const int i : members) bev.push_back({pts[i].x, pts[i].z});
   }
   s.footprint = fit_rectangle(bev, o);
   s.road_up = road;

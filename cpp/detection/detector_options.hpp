@@ -59,6 +59,11 @@ struct DetectorOptions {
   int min_cluster_points = 10;
 
   // --- box fitting ---
+  // m above the road up to which returns shape the footprint: car bodies are vertical up to
+  // ~1 m (below the windows); above, windows, roof and hood slope inwards and spread their
+  // returns over the top (a 1.5 m roof seen from a 1.73 m sensor). Clusters with fewer than
+  // min_cluster_points such returns use all of theirs.
+  double footprint_max_height_m = 1.0;
   // deg, step of the heading search of the L-shape fit over [0, 90) deg: a 1 deg heading
   // error shifts a 4 m car's corner by 3.5 cm, below the LiDAR's own footprint.
   double heading_step_deg = 1.0;
@@ -128,6 +133,7 @@ void for_each_option(DetectorOptions& o, Visit&& visit) {
   visit("cluster_cell_m", o.cluster_cell_m, 0.05, 5.0);  // the grid stays below ~16M cells
   visit("cluster_gap_m", o.cluster_gap_m, 0.0, 5.0);    // at most 100 cells of reach
   visit("min_cluster_points", o.min_cluster_points, 3, 1000000);  // 3: a fit needs a shape
+  visit("footprint_max_height_m", o.footprint_max_height_m, 0.0, 20.0);
   visit("heading_step_deg", o.heading_step_deg, 0.1, 45.0);
   visit("closeness_floor_m", o.closeness_floor_m, 0.001, 1.0);
   visit("max_fit_points", o.max_fit_points, 10, 1000000);
