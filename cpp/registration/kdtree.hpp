@@ -21,6 +21,9 @@ class KdTree {
   explicit KdTree(const std::vector<Vec3>& points);
 
   int size() const { return static_cast<int>(points_.size()); }
+  // The caller's point indices in the tree's leaf order: neighbouring points come close
+  // together, so querying them in this order keeps the tree's nodes in cache.
+  const std::vector<int>& leaf_order() const { return original_index_; }
 
   // Up to k neighbours of `query`, nearest first (fewer when the tree holds fewer points).
   std::vector<Neighbor> knn(const Vec3& query, int k) const;
@@ -43,8 +46,13 @@ class KdTree {
     int second = 0;  // inner: right child; leaf: end
   };
   int build(const std::vector<Vec3>& points, int begin, int end);
-  void knn_recursive(int node, const Vec3& q, int k, double cell_distance2, Vec3* offset,
-                     std::vector<Neighbor>* best) const;
+  struct KnnState {
+    Neighbor* best;  // k slots, the first `count` filled, nearest first
+    int k;
+    int count;
+  };
+  void knn_recursive(int node, const Vec3& q, double cell_distance2, Vec3* offset,
+                     KnnState* state) const;
   void nearest_recursive(int node, const Vec3& q, double cell_distance2, Vec3* offset,
                          Neighbor* best) const;
 

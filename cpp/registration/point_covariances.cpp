@@ -12,7 +12,7 @@ std::vector<Mat3> plane_covariances(const std::vector<Vec3>& points, const KdTre
   std::vector<Mat3> covariances(points.size());
   std::vector<Neighbor> neighbors;
   const Vec3 plane_eigenvalues(plane_epsilon, 1.0, 1.0);  // ascending, as the solver returns
-  for (std::size_t i = 0; i < points.size(); ++i) {
+  for (const int i : tree.leaf_order()) {
     tree.knn(points[i], num_neighbors, &neighbors);
     Vec3 mean = Vec3::Zero();
     for (const Neighbor& n : neighbors) mean += points[n.index];
