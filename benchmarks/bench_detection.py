@@ -8,7 +8,8 @@ per scan): median wall ms per scan of the whole detector and of each stage (regi
 interest, road, clustering, fit + classes), ``--repeats`` runs per frame; then, against
 ``label_2`` Cars, recall and precision at BEV IoU 0.5 and 0.7 (greedy matching by score, a
 detection on a Van or DontCare box is neither right nor wrong), for labels within 30 m and
-within the detector's range. ``--sim ROOT`` adds the same table on a simulated KITTI-layout
+within the detector's range. ``--tracking ROOT`` adds the same
+table on a real tracking sequence (``--seq``, default 0001). ``--sim ROOT`` adds the same table on a simulated KITTI-layout
 sequence (its ``label_02/0000.txt``) plus the median yaw (mod pi) and size errors of the
 matched cars. The time includes the float32 -> float64 conversion of the scan.
 """
@@ -123,6 +124,10 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--sim", type=Path, help="simulated KITTI tracking root (sequence 0000)")
     parser.add_argument("--frames", type=int, default=100, help="simulated frames used")
+    parser.add_argument("--tracking", type=Path,
+                        help="real KITTI tracking root with scans (e.g. the data root's "
+                             "kitti_tracking_lidar): its sequence --seq as a second real table")
+    parser.add_argument("--seq", default="0001")
     parser.add_argument("--set", dest="settings", action="append", type=_setting, default=[],
                         metavar="KEY=VALUE", help="detector option")
     args = parser.parse_args()
@@ -134,6 +139,11 @@ def main() -> None:
     print(f"== real KITTI object frames ({root})")
     timing_table([f.points_c for f in real], options, args.repeats)
     quality_table([(s, f.objects_gt) for s, f in zip(scans, real)], options)
+    if args.tracking:
+        seq = KittiTracking(args.tracking, args.seq)
+        frames = [seq[i] for i in range(len(seq))]
+        print(f"== real KITTI tracking {args.tracking} {args.seq} ({len(frames)} frames)")
+        quality_table([(f.points_c, f.objects_gt) for f in frames], options)
     if args.sim:
         seq = KittiTracking(args.sim, "0000")
         n = min(args.frames, len(seq))
