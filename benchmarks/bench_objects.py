@@ -14,6 +14,9 @@ on the simulator's sequence, ``.cache/sim/SCENARIO-seedS-nF``, generated when mi
 * ``dis``: OpenCV DIS flow instead of the flow files;
 * ``boxes-seg``: instance masks from the oracle detections instead of the panoptic files;
 * ``kp-only`` / ``kp-extra``: ``visual_objects.extra_keypoints`` False / True;
+* ``det``: LiDAR fusion with the simulator's oracle 3D detections (``detector="files"``):
+  canonical poses, sizes, e_det (every other row runs with ``detector="none"``, the camera
+  alone);
 * ``raft``: RAFT flow (``raft_small``) from the state-dict file ``--raft-weights FILE`` (or
   ``$TWISTSLAM_RAFT_WEIGHTS``) over the first ``--raft-frames`` frames only (default 10: RAFT
   is slow on a CPU), so its object metrics still count every car of the whole sequence and
@@ -71,6 +74,7 @@ class Row:
     overrides: dict = field(default_factory=dict)
     segmentation: str = "files"
     flow: str = "files"
+    detector: str = "none"
 
 
 #: config section of the visual object tracking (python/twistslam/config_visual_objects.py)
@@ -87,6 +91,8 @@ ROWS = {r.name: r for r in [
     Row("raft", flow="raft"),
     # e_dyna in the keyframe BA (off by default): the camera columns are the comparison
     Row("dyn-ba", {"local_ba": {"dynamic_objects": True}}),
+    # LiDAR fusion (issue 11): the oracle detections (canonical pose, size, e_det)
+    Row("det", detector="files"),
 ]}
 #: environment variable naming the RAFT state-dict file when --raft-weights is not given
 RAFT_WEIGHTS_ENV = "TWISTSLAM_RAFT_WEIGHTS"
@@ -123,7 +129,8 @@ def raft_settings(row: Row, weights: Path | None, frames: int) -> tuple[Path | N
 def run_slam(root: Path, row: Row, config, flow_weights: Path | None = None) -> object:
     try:
         return twistslam.run((root, SEQ), config=config, progress=False,
-                             segmentation=row.segmentation, flow=row.flow, flow_weights=flow_weights)
+                             segmentation=row.segmentation, flow=row.flow, flow_weights=flow_weights,
+                             detector=row.detector)
     except TypeError as exc:  # the perception arguments are being added (issue 10)
         if "segmentation" in str(exc) or "flow" in str(exc):
             raise NotAvailable(f"twistslam.run: {exc}") from None
@@ -187,7 +194,7 @@ def median_stage(result, word: str) -> float:
 
 HEADER = (f"{'scenario':<14} {'row':<10} {'RPE_t':>6} {'RPE_r':>6} {'ATE_al':>6} "
           f"{'tracked':>8} {'ghosts':>6} {'camATE':>7} {'camRPEt':>8} {'camRPEr':>8} "
-          f"{'flow ms':>7} {'Hz':>6}  object ms/obj/frame")
+          f"{'flow ms':>7} {'Hz':>6}  object ms/obj/frame; canonical RPE_t RPE_r ATE")
 
 
 def format_row(label: str, name: str, ev, cam, result) -> str:
@@ -195,7 +202,16 @@ def format_row(label: str, name: str, ev, cam, result) -> str:
     return (f"{label:<14} {name:<10} {ev.rpe_t:>6.3f} {ev.rpe_r:>6.3f} {ev.ate_aligned:>6.3f} "
             f"{f'{ev.n_tracked}/{len(ev.cars)}':>8} {ev.n_ghosts:>6} {cam.ate_rmse:>7.3f} "
             f"{cam.rpe_t_mean:>8.4f} {cam.rpe_r_mean:>8.4f} {median_stage(result, 'flow'):>7.1f} "
-            f"{result.timings.hz:>6.1f}  {obj_ms}")
+            f"{result.timings.hz:>6.1f}  {obj_ms}{canonical_columns(ev)}")
+
+
+def canonical_columns(ev) -> str:
+    """The canonical variant (no offset, no alignment; issue 11) where every car has it."""
+    s = ev.summary()
+    if not np.isfinite(s["ate_canonical"]):
+        return ""
+    return (f"; canonical {s['rpe_t_canonical']:.3f} {s['rpe_r_canonical']:.3f} "
+            f"{s['ate_canonical']:.3f}")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -19,7 +19,7 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
   DoubleArray twists = new_array({K, 6}), scores = new_array({K}), sizes = new_array({K, 3});
   DoubleArray ranges = new_array({K}), confidences = new_array({K});
   py::array_t<std::int64_t> frames(K), det_index(K);
-  py::array_t<bool> detected(K), reported(K);
+  py::array_t<bool> detected(K), reported(K), registered(K);
   for (py::ssize_t k = 0; k < K; ++k) {
     const auto& f = *rows[k];
     for (int r = 0; r < 4; ++r)
@@ -36,6 +36,7 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
     det_index.mutable_data()[k] = f.detection_index;
     detected.mutable_data()[k] = f.detected;
     reported.mutable_data()[k] = f.reported;
+    registered.mutable_data()[k] = f.registered;
   }
   return py::dict("id"_a = t.id, "class_id"_a = t.class_id, "state"_a = o::to_string(t.state),
                   "link"_a = t.link == geometry::LinkType::kPlanar ? "planar" : "free",
@@ -45,7 +46,8 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
                   "T_w_o"_a = poses, "T_w_o_detected"_a = detected_poses, "twist"_a = twists,
                   "detected"_a = detected, "reported"_a = reported, "score"_a = scores,
                   "range"_a = ranges, "frame_confidence"_a = confidences,
-                  "detected_size"_a = sizes, "detection_index"_a = det_index);
+                  "detected_size"_a = sizes, "detection_index"_a = det_index,
+                  "canonical"_a = t.canonical, "registered"_a = registered);
 }
 
 }  // namespace twistslam::bindings

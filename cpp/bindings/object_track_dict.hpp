@@ -10,8 +10,9 @@ namespace twistslam::bindings {
 namespace py = pybind11;
 
 // id, class_id, state, link, size, hits, confirmed_frame, mean_score, confidence, backcast,
-// and per row (K = backcast frames, then frames): frames, T_w_o, T_w_o_detected, twist,
-// detected, reported, score, range, frame_confidence, detected_size, detection_index.
+// canonical, and per row (K = backcast frames, then frames): frames, T_w_o, T_w_o_detected,
+// twist, detected, reported, score, range, frame_confidence, detected_size, detection_index,
+// registered.
 py::dict track_to_dict(const objects::ObjectTrack& t);
 
 }  // namespace twistslam::bindings

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "bindings/detection_arrays.hpp"
 #include "bindings/numpy_checks.hpp"
 #include "bindings/object_track_dict.hpp"
 #include "bindings/options_table.hpp"
@@ -109,23 +110,8 @@ options : dict
            [](o::Tracker& tr, int frame, py::handle T_w_c, py::handle boxes, py::handle scores,
               py::handle class_ids, py::handle planar) {
              const Mat4 T = as_mat4(T_w_c, "T_w_c");
-             const DoubleArray b = as_rows(boxes, "boxes", 7);
-             const auto n = b.shape(0);
-             const DoubleArray s = as_double_array(scores, "scores");
-             const auto c = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(class_ids);
-             const auto p = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(planar);
-             if (!c || !p) throw py::type_error("class_ids / planar: expected integer / boolean arrays");
-             if (s.ndim() != 1 || s.shape(0) != n || c.ndim() != 1 || c.shape(0) != n || p.ndim() != 1 || p.shape(0) != n)
-               throw py::value_error("scores, class_ids, planar: expected (" + std::to_string(n) +
-                                     ",) arrays like boxes, got " + shape_string(s) + ", " +
-                                     shape_string(c) + ", " + shape_string(p));
-             std::vector<o::Detection> dets(n);
-             for (py::ssize_t i = 0; i < n; ++i) {
-               dets[i].box = geometry::Box3D::from_row(b.data() + 7 * i);
-               dets[i].score = s.data()[i];
-               dets[i].class_id = static_cast<int>(c.data()[i]);
-               dets[i].planar = p.data()[i];
-             }
+             if (planar.is_none()) throw py::type_error("planar: expected a boolean array");
+             const std::vector<o::Detection> dets = detections_from_arrays(boxes, scores, class_ids, planar);
              py::gil_scoped_release release;
              try {
                tr.step(frame, T, dets);

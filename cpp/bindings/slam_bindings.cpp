@@ -3,6 +3,7 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include "bindings/detection_arrays.hpp"
 #include "bindings/numpy_checks.hpp"
 #include "bindings/object_track_dict.hpp"
 #include "bindings/slam_options.hpp"
@@ -93,8 +94,12 @@ options : dict
       .def("track",
            [](t::System& s, int index, double timestamp, const py::array& left, const py::array& right,
               const py::object& labels, const py::object& points_c, const py::object& instances,
-              const py::object& flow) {
+              const py::object& flow, const py::object& boxes, const py::object& scores,
+              const py::object& class_ids) {
              const cv::Mat l = image_view(left, "image_left", false);
+             std::vector<objects::Detection> detections;
+             if (!boxes.is_none())
+               detections = detections_from_arrays(boxes, scores, class_ids, py::none());
              Points3 scan;
              if (!points_c.is_none()) scan = points_view(as_rows(points_c, "points_c", 3));
              const cv::Mat r = image_view(right, "image_right", false);
@@ -118,7 +123,7 @@ options : dict
              {
                py::gil_scoped_release release;
                try {
-                 result = s.track(index, timestamp, l, r, lab, scan, inst, flo);
+                 result = s.track(index, timestamp, l, r, lab, scan, inst, flo, detections);
                } catch (const std::invalid_argument& e) {
                  py::gil_scoped_acquire acquire;
                  throw py::value_error("frame " + std::to_string(index) + ": " + e.what());
@@ -128,6 +133,7 @@ options : dict
            },
            "index"_a, "timestamp"_a, "image_left"_a, "image_right"_a, "labels"_a = py::none(),
            "points_c"_a = py::none(), "instances"_a = py::none(), "flow"_a = py::none(),
+           "boxes"_a = py::none(), "scores"_a = py::none(), "class_ids"_a = py::none(),
            R"doc(Track one stereo frame.
 
 Parameters
@@ -150,6 +156,10 @@ instances : ndarray of int32 (H, W), optional
 flow : ndarray of float32 (H, W, 2), optional
     Optical flow (u, v) px from the previous frame's left image to this one, NaN where
     unknown: the search of object tracking starts at the flow-predicted position.
+boxes : ndarray (N, 7) float, optional
+    The frame's 3D detections [cx, cy, cz, l, w, h, ry] in frame c (geometric centre, KITTI
+    yaw), with ``scores`` (N,) and ``class_ids`` (N,) int in the panoptic vocabulary: the
+    LiDAR fusion of object tracking (``lidar_objects``): canonical pose, size and e_det.
 
 Returns
 -------

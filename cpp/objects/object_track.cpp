@@ -25,7 +25,7 @@ double ObjectTrack::mean_score() const {
   double sum = 0;
   int n = 0;
   for (const auto& f : frames) {
-    if (f.detected) sum += f.score, ++n;
+    if (f.has_detection()) sum += f.score, ++n;
   }
   return n ? sum / n : 0.0;
 }
@@ -34,7 +34,7 @@ double ObjectTrack::confidence() const {
   double sum = 0;
   int n = 0;
   for (const auto& f : frames) {
-    if (f.detected) sum += f.confidence, ++n;
+    if (f.has_detection()) sum += f.confidence, ++n;
   }
   return n ? sum / n : 0.0;
 }
@@ -44,7 +44,7 @@ void ObjectTrack::update_size() {
   for (int d = 0; d < 3; ++d) {
     dim.clear();
     for (const auto& f : frames) {
-      if (f.detected) dim.push_back(f.detected_size[d]);
+      if (f.has_detection()) dim.push_back(f.detected_size[d]);
     }
     if (dim.empty()) continue;
     // the median, as the paper fuses sizes: robust to a few truncated / merged detections

@@ -37,6 +37,12 @@ struct TrackFrame {
   double confidence = 0;          // its range-corrected score (TrackerOptions)
   int detection_index = -1;       // its index in the frame's detection list
   bool reported = false;          // part of the output (set by the tracker's output policy)
+  // LiDAR registration (eq. 6-7): the object's motion in w from the previous frame to this
+  // one, T_w_o(this) = M_w_registered T_w_o(previous), measured by GICP of the object scans
+  bool registered = false;
+  Mat4 M_w_registered = Mat4::Identity();
+
+  bool has_detection() const { return detection_index >= 0; }
 };
 
 struct ObjectTrack {
@@ -54,6 +60,11 @@ struct ObjectTrack {
   int misses = 0;                  // consecutive frames without one, up to the last frame
   int confirmed_frame = -1;        // frame at which it was confirmed (-1: never)
   TravelDirection travel;          // its direction of travel in the object frame (vehicles)
+  // the object frame is the box frame of a 3D detection (canonical pose: origin at the box
+  // centre, x along the length, y down), not the cluster's arbitrary first frame
+  bool canonical = false;
+  int canonical_frame = -1;        // the frame whose box set it
+  bool heading_from_motion = false;  // its front was checked against the direction it moved
 
   bool alive() const { return state != TrackState::kDead; }
   bool ever_confirmed() const { return confirmed_frame >= 0; }

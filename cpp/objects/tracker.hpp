@@ -10,17 +10,12 @@
 
 #include "geometry/box3d.hpp"
 #include "objects/association.hpp"
+#include "objects/detection.hpp"
 #include "objects/object_track.hpp"
 #include "optim/object_window.hpp"
 
 namespace twistslam::objects {
 
-struct Detection {
-  geometry::Box3D box;  // in the camera frame of its frame (geometric centre, KITTI yaw)
-  double score = 0;
-  int class_id = 0;     // tracks and detections associate within a class only
-  bool planar = true;   // the class moves on the ground plane (planar link), else free
-};
 
 // Defaults = twistslam.Config().objects (python/twistslam/config_objects.py says why each).
 struct TrackerOptions {

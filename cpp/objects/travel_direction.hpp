@@ -1,6 +1,6 @@
 #pragma once
 // The direction a vehicle travels in, in its own object frame: the axis the non-holonomic
-// prior (optim/lateral_velocity_cost.hpp) ties its yaw to. A cluster's object frame starts
+// prior (optim/heading_cost.hpp) ties its yaw to. A cluster's object frame starts
 // with the camera's rotation (no canonical pose before detections), so the axis is learned
 // from the track: the principal axis of its frame-to-frame displacements expressed in the
 // object frame, d_o = R_w_o^T (t_w_o(i) - t_w_o(i-1)), projected onto the road plane. The
@@ -20,6 +20,9 @@ struct TravelDirection {
   // min_path_m or its steps spread too much: the largest eigenvalue of the moments must be
   // min_anisotropy times the second.
   Vec3 axis(double min_path_m, double min_anisotropy) const;
+  // The object frame turned by R_old_new (a canonical frame replacing the cluster's first
+  // one): the steps d_new = R^T d_old, so the moments become R^T M R.
+  void rotate(const Mat3& R_old_new) { moments = R_old_new.transpose() * moments * R_old_new; }
 };
 
 }  // namespace twistslam::objects

@@ -52,6 +52,32 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
       b.add_constant_velocity(object_block[i - 1], object_block[i], object_block[i + 1], Pi,
                               o.const_sigma_translation, o.const_sigma_rotation, o.huber_const);
   }
+  // LiDAR terms, in the local frame: a world twist seen from S is Ad_S xi, so the measured
+  // poses and motions are moved by S as the blocks are
+  const bool with_det = static_cast<int>(w.T_w_det.size()) == n &&
+                        static_cast<int>(w.has_detection.size()) == n;
+  if (with_det) {
+    for (int i = 0; i < n; ++i) {
+      if (!w.has_detection[i]) continue;
+      const Mat4 T_det = S * w.T_w_det[i];
+      if (o.use_detection_pose && i >= w.num_fixed_frames)
+        b.add_detection_pose(object_block[i], T_det, o.det_pose_sigma_translation,
+                             o.det_pose_sigma_rotation, o.huber_det);
+      if (o.use_detection_twist && i + 1 < n && w.has_detection[i + 1] && i + 1 >= w.num_fixed_frames)
+        b.add_detection_twist(object_block[i], object_block[i + 1], Pi,
+                              geometry::twist_between(T_det, S * w.T_w_det[i + 1]),
+                              o.det_sigma_translation, o.det_sigma_rotation, o.huber_det);
+    }
+  }
+  if (o.use_registration && static_cast<int>(w.M_w_reg.size()) == n &&
+      static_cast<int>(w.has_registration.size()) == n) {
+    for (int i = 0; i + 1 < n; ++i) {
+      if (!w.has_registration[i] || i + 1 < w.num_fixed_frames) continue;
+      const Vec6 xi_r = geometry::se3_log(S * w.M_w_reg[i] * S_inv);  // eq. 7
+      b.add_detection_twist(object_block[i], object_block[i + 1], Pi, xi_r,
+                            o.reg_sigma_translation, o.reg_sigma_rotation, o.huber_reg);
+    }
+  }
   out.num_residuals = b.num_residuals();
   if (out.num_residuals == 0) return out;
   detail::SolveOptions so;

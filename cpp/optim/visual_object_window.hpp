@@ -5,6 +5,11 @@
 //   e_dyna   reprojection of X_c = T_c_w T_w_o X_o against each observation (stereo or mono);
 //   e_const  constant velocity Pi (xi~_{i+1} - xi~_i) over three consecutive poses;
 //   e_link   (I - Pi) xi~_i, the motion the mechanical link forbids (a stiff prior),
+//   e_det    Pi (xi_d - xi~_i), the twist between two consecutive 3D detections (eq. 5),
+//            plus a weak prior on each detected pose (not in the paper: it anchors the
+//            canonical pose the twists alone would let drift),
+//   e_reg    Pi (xi_r - xi~_i), the motion GICP measured between consecutive object scans
+//            (eq. 6-7),
 // each a cost family of the ProblemBuilder (the ones the full BA and the detections
 // tracker's window use). Frame-to-frame twists (eq. 4) are noisy where a car shows few
 // corners; e_const is what smooths them (TwistSLAM). Public header: Eigen and std only.
@@ -32,6 +37,13 @@ struct VisualObjectWindow {
   // e_head: the travel axis in the object frame (zero: unknown, no term) and the road normal
   Vec3 travel_axis_o = Vec3::Zero();
   Vec3 up_w = Vec3(0, -1, 0);
+  // LiDAR terms, one entry per frame or none: the associated detection's box pose T_w_det
+  // (has_detection), and the motion M_w = T_w_o(i+1) T_w_o(i)^-1 registration measured
+  // from frame i to i + 1 (has_registration[i]; the last entry is unused)
+  std::vector<Mat4> T_w_det;
+  std::vector<char> has_detection;
+  std::vector<Mat4> M_w_reg;
+  std::vector<char> has_registration;
 };
 
 struct VisualObjectWindowOptions {
@@ -47,6 +59,24 @@ struct VisualObjectWindowOptions {
   double huber_const = 3.0;              // sigmas
   double lateral_sigma = 0.02;           // m/frame, e_head
   double huber_heading = 3.0;            // sigmas
+  // e_det (eq. 9): sigmas of the twist between two detections, per frame. Box centres of a
+  // LiDAR detector scatter by ~0.1-0.2 m and headings by a few degrees (the oracle detections
+  // of the simulator by 0.1 m / 2 deg), so a twist from two of them by ~sqrt(2) of that
+  double det_sigma_translation = 0.2;    // m/frame
+  double det_sigma_rotation = 0.05;      // rad/frame
+  double huber_det = 2.0;                // sigmas
+  // detection pose prior (not in the paper): a detection's box pose anchors the pose of its
+  // frame; weak, so that the twists (visual, e_det, e_reg) keep the trajectory's shape
+  double det_pose_sigma_translation = 0.3;  // m
+  double det_pose_sigma_rotation = 0.1;     // rad
+  // e_reg (eq. 9): sigmas of the registered motion between consecutive object scans; GICP of
+  // car scans is good to ~1-3 cm and ~0.2 deg (benchmarks/bench_gicp.py)
+  double reg_sigma_translation = 0.03;   // m/frame
+  double reg_sigma_rotation = 0.005;     // rad/frame
+  double huber_reg = 2.0;                // sigmas
+  bool use_detection_twist = true;
+  bool use_detection_pose = true;
+  bool use_registration = true;
   bool use_const = true;
   bool use_link = true;
   bool use_heading = true;               // e_head where the window has a travel axis

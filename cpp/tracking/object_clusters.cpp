@@ -197,7 +197,25 @@ void ObjectTracker::refine_window(int c) {
     w.travel_axis_o = track.travel.axis(options_.travel_min_path_m, options_.travel_min_anisotropy);
     w.up_w = up_w_;
   }
+  // LiDAR terms: the boxes of the window's frames (e_det; the pose prior only where the
+  // object frame is the box frame) and the registered motions (e_reg)
+  for (int r = first; r < first + rows; ++r) {
+    const objects::TrackFrame& row = track.frames[r];
+    w.T_w_det.push_back(row.T_w_o_detected);
+    w.has_detection.push_back(row.has_detection());
+    // M_w_reg[i] links window frame i to i + 1: stored on the later row
+    const bool next = r + 1 < first + rows && track.frames[r + 1].registered;
+    w.M_w_reg.push_back(next ? track.frames[r + 1].M_w_registered : Mat4::Identity());
+    w.has_registration.push_back(next);
+  }
   optim::VisualObjectWindowOptions wo;
+  wo.use_detection_twist = lidar_options_.use_detection_twist;
+  wo.det_sigma_translation = lidar_options_.det_sigma_translation;
+  wo.det_sigma_rotation = lidar_options_.det_sigma_rotation;
+  wo.use_detection_pose = lidar_options_.use_detection_pose && track.canonical;
+  wo.det_pose_sigma_translation = lidar_options_.det_pose_sigma_translation;
+  wo.det_pose_sigma_rotation = lidar_options_.det_pose_sigma_rotation;
+  wo.huber_det = lidar_options_.huber_det;
   wo.use_heading = options_.nonholonomic;
   wo.lateral_sigma = options_.lateral_sigma_m;
   wo.use_const = options_.use_const;
@@ -233,7 +251,8 @@ void ObjectTracker::add_travel_step(objects::ObjectTrack& track) const {
 }
 
 void ObjectTracker::recenter(int c) {
-  if (!(options_.recenter_distance_m > 0)) return;
+  // a canonical frame's origin is the box centre, not the points' median
+  if (!(options_.recenter_distance_m > 0) || tracks_[c].canonical) return;
   objects::ObjectCluster& cluster = clusters_[c];
   std::vector<Vec3> confirmed;
   for (const objects::ObjectPoint& p : cluster.points)

@@ -8,6 +8,7 @@
 
 #include "geometry/link_projection.hpp"
 #include "geometry/se3.hpp"
+#include "objects/association.hpp"
 #include "objects/instance_association.hpp"
 #include "objects/motion_model.hpp"
 #include "tracking/object_point_helpers.hpp"
@@ -52,8 +53,10 @@ constexpr double kNewbornSearchScale = 3.0;
 
 ObjectTracker::ObjectTracker(const geometry::StereoCamera& camera,
                              const ObjectTrackingOptions& options,
-                             const std::vector<float>& scale_factors, LevelWeights weights)
-    : camera_(camera), options_(options), scale_factors_(scale_factors), weights_(std::move(weights)) {
+                             const std::vector<float>& scale_factors, LevelWeights weights,
+                             const ObjectLidarOptions& lidar_options)
+    : camera_(camera), options_(options), lidar_options_(lidar_options),
+      scale_factors_(scale_factors), weights_(std::move(weights)) {
   lm_options_.max_iterations = options.lm_iterations;
   lm_options_.min_inliers = options.min_inliers;
 }
@@ -168,7 +171,7 @@ void ObjectTracker::refine_matches(const objects::ObjectCluster& cluster, const 
 }
 
 bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match> matches,
-                                   int instance, const Mat4& T_w_o_pred) {
+                                   int instance, const Mat4& T_w_o_pred, int detection) {
   objects::ObjectCluster& cluster = clusters_[c];
   objects::ObjectTrack& track = tracks_[c];
   const Mat4 T_w_o_prev = track.last().T_w_o;
@@ -217,6 +220,14 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     track.misses = 0;
     track.state = objects::TrackState::kConfirmed;
     if (track.confirmed_frame < 0) track.confirmed_frame = frame.index;
+  } else if (detection >= 0 && track.canonical) {
+    // no twist, but a box: the track lives on at the box pose (heading aligned by
+    // attach_detection below), its velocity kept
+    const Mat4 T_w_box = geometry::se3_inverse(frame.T_c_w) * detections_[detection].box.pose();
+    row.T_w_o = objects::heading_flipped(T_w_box, T_w_o_pred) ? objects::turned_around(T_w_box) : T_w_box;
+    track.last().xi = track.Pi * geometry::twist_between(T_w_o_prev, row.T_w_o);
+    track.misses = 0;
+    track.state = objects::TrackState::kConfirmed;
   } else {
     row.T_w_o = T_w_o_pred;
     track.last().xi = track.Pi * cluster.velocity;
@@ -224,8 +235,9 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     track.state = track.misses > options_.max_misses ? objects::TrackState::kDead
                                                       : objects::TrackState::kLost;
   }
-  row.reported = valid || reseeded;
+  row.reported = valid || reseeded || (detection >= 0 && track.canonical);
   track.frames.push_back(row);
+  if (detection >= 0) attach_detection(c, frame, detection);
   if (reseeded) return false;  // fresh points: no statistics, window or new points this frame
 
   // point statistics: visible where predicted inside the image, found where an inlier
@@ -264,7 +276,8 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
 
 ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& instances,
                                           const cv::Mat& flow, const Vec3& up_w,
-                                          const cv::Mat& labels, const Vec4& road_plane_w) {
+                                          const cv::Mat& labels, const Vec4& road_plane_w,
+                                          const std::vector<objects::Detection>& detections) {
   ObjectTrackingReport report;
   if (!options_.enabled) return report;
   if (!instances.empty() && (instances.type() != CV_32SC1 || instances.cols != camera_.width ||
@@ -323,17 +336,26 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
     return clusters_[live[a]].points.size() > clusters_[live[b]].points.size();
   });
+  // 3D detections <-> clusters, at their predicted poses (LiDAR fusion)
+  detections_.clear();
+  for (const objects::Detection& d : detections)
+    if (d.score >= lidar_options_.detection_min_score && d.box.valid()) detections_.push_back(d);
+  detection_used_.assign(detections_.size(), 0);
+  const std::vector<int> detection_of = associate_detections(frame, live, predicted);
   for (int j : order) {
-    const bool valid = update_cluster(live[j], frame, std::move(matches[j]), instance_of[j], predicted[j]);
+    const bool valid = update_cluster(live[j], frame, std::move(matches[j]), instance_of[j],
+                                      predicted[j], detection_of[j]);
     ++(valid ? report.num_tracked : report.num_missed);
   }
   // 4. new clusters from the instances of object classes nobody claimed
+  const int first_new = static_cast<int>(tracks_.size());
   if (!instances.empty()) {
     for (const auto& [instance, class_id] : instance_class_) {
       if (assigned_instances_.count(instance) || !contains(options_.object_class_ids, class_id)) continue;
       report.num_new += start_cluster(frame, instance, class_id, up_w);
     }
   }
+  attach_new_cluster_detections(frame, first_new);
   for (int c = 0; c < static_cast<int>(tracks_.size()); ++c)
     if (tracks_[c].alive()) tracks_[c].class_id = clusters_[c].class_votes.best(tracks_[c].class_id);
   for (int owner : claimed_by_) report.num_points += owner >= 0;
@@ -341,6 +363,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   // the caller's images are this call's only: no view of them outlives it
   instances_.release();
   labels_.release();
+  detections_.clear();
   return report;
 }
 

@@ -13,6 +13,10 @@
 //      object classes with no cluster start one (identity rotation at the centroid);
 //   5. points rarely found are culled; a cluster without a valid twist for max_misses frames
 //      ends its track.
+// With 3D detections (LiDAR fusion, object_detection_fusion.cpp), each frame's boxes are
+// associated with the clusters before step 3: a cluster's first box sets its canonical frame,
+// later ones its size and the e_det terms of its window; a box keeps a cluster whose twist
+// failed on its pose.
 // The state is objects::ObjectTrack (one per cluster) + objects::ObjectCluster (its points).
 #include <map>
 #include <opencv2/core/mat.hpp>
@@ -28,7 +32,9 @@
 #include "objects/twist_estimation.hpp"
 #include "tracking/frame.hpp"
 #include "tracking/level_weights.hpp"
+#include "objects/detection.hpp"
 #include "tracking/object_bundle_terms.hpp"
+#include "tracking/object_lidar_options.hpp"
 #include "tracking/object_tracking_options.hpp"
 
 namespace twistslam::tracking {
@@ -43,7 +49,8 @@ struct ObjectTrackingReport {
 class ObjectTracker : public ObjectBundleTerms {
  public:
   ObjectTracker(const geometry::StereoCamera& camera, const ObjectTrackingOptions& options,
-                const std::vector<float>& scale_factors, LevelWeights weights);
+                const std::vector<float>& scale_factors, LevelWeights weights,
+                const ObjectLidarOptions& lidar_options = ObjectLidarOptions());
 
   // frame: keypoints with class labels and the tracked camera pose frame.T_c_w;
   // instances: CV_32SC1 instance ids of the left image (0: none), empty: no masks this frame
@@ -53,9 +60,11 @@ class ObjectTracker : public ObjectBundleTerms {
   // labels: empty or CV_32SC1 class ids per pixel and road_plane_w the road (n, d) in the
   // world (zero: none): with both, a vehicle instance with too few stereo points may start a
   // cluster at its ground-contact depth (ground_contact.hpp).
+  // detections: the frame's 3D boxes (camera frame; class_id in the panoptic vocabulary).
   ObjectTrackingReport track(const Frame& frame, const cv::Mat& instances, const cv::Mat& flow,
                              const Vec3& up_w, const cv::Mat& labels = cv::Mat(),
-                             const Vec4& road_plane_w = Vec4::Zero());
+                             const Vec4& road_plane_w = Vec4::Zero(),
+                             const std::vector<objects::Detection>& detections = {});
 
   // The frame just tracked becomes a keyframe: its object observations are kept for the
   // local BA (e_dyna), the latest max_keyframes per point.
@@ -89,8 +98,21 @@ class ObjectTracker : public ObjectBundleTerms {
   // Whether keypoint k may belong to a cluster associated with `instance` (-1: none).
   bool keypoint_allowed(int k, int instance) const;
   // Step 3 for one cluster; returns whether the twist was valid.
+  // detection: index of the frame's box associated with it (-1: none).
   bool update_cluster(int c, const Frame& frame, std::vector<Match> matches, int instance,
-                      const Mat4& T_w_o_pred);
+                      const Mat4& T_w_o_pred, int detection);
+  // LiDAR fusion (object_detection_fusion.cpp). The detection index per cluster of
+  // `clusters` (at poses T_w_o), one to one, among the boxes not used yet (-1: none).
+  std::vector<int> associate_detections(const Frame& frame, const std::vector<int>& clusters,
+                                        const std::vector<Mat4>& T_w_o) const;
+  // Box d joins cluster c's last frame: canonical frame (first box), size, e_det.
+  void attach_detection(int c, const Frame& frame, int d);
+  // The object frame of cluster c becomes the box frame T_w_box at its last frame.
+  void make_canonical(int c, const Mat4& T_w_box);
+  // Once it has moved heading_from_motion_m, a canonical frame facing backwards turns.
+  void check_heading_from_motion(int c);
+  // Clusters from first_new on (started this frame) take the boxes still unused.
+  void attach_new_cluster_detections(const Frame& frame, int first_new);
   // Step 4: stereo keypoints of `instance` not claimed yet -> points of cluster c.
   void add_points(int c, const Frame& frame, int instance);
   // Stereo keypoints of `instance` no cluster claimed, in the world frame.
@@ -129,6 +151,7 @@ class ObjectTracker : public ObjectBundleTerms {
 
   geometry::StereoCamera camera_;
   ObjectTrackingOptions options_;
+  ObjectLidarOptions lidar_options_;
   std::vector<float> scale_factors_;
   LevelWeights weights_;
   objects::TwistEstimationOptions lm_options_;
@@ -139,6 +162,8 @@ class ObjectTracker : public ObjectBundleTerms {
   Vec3 up_w_ = Vec3(0, -1, 0);          // the road normal of the frame being tracked
   cv::Mat instances_, labels_;          // during track(): the caller's images (views)
   Vec4 road_plane_w_ = Vec4::Zero();    // its road plane (zero: none)
+  std::vector<objects::Detection> detections_;  // during track(): the frame's boxes (frame c)
+  std::vector<char> detection_used_;            // ... associated with a cluster
   int next_id_ = 0;
   int last_frame_ = -1;
   // per keypoint of the current frame

@@ -47,7 +47,7 @@ struct ObjectTrackingOptions {
   double const_sigma_rotation = 0.005;    // rad/frame, change of the rotational twist
   int window_iterations = 5;        // Ceres iterations of the window
   double recenter_distance_m = 0.5; // origin moved to the points' median beyond this (0: never)
-  // non-holonomic prior in the window (optim/lateral_velocity_cost.hpp), planar-link classes
+  // non-holonomic prior in the window (optim/heading_cost.hpp), planar-link classes
   bool nonholonomic = true;
   double lateral_sigma_m = 0.02;     // m/frame across the travel axis
   double travel_min_path_m = 3.0;    // m travelled before the travel axis is trusted

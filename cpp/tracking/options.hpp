@@ -9,6 +9,7 @@
 #include "features/stereo.hpp"
 #include "features/stereo_option_ranges.hpp"
 #include "tracking/lidar_keypoint_depth.hpp"
+#include "tracking/object_lidar_options.hpp"
 #include "tracking/object_tracking_options.hpp"
 
 namespace twistslam::tracking {
@@ -73,6 +74,7 @@ struct SlamOptions {
   MapOptions map;
   LidarOptions lidar;  // keypoint depth from a frame's scan (tracking/lidar_keypoint_depth.hpp)
   ObjectTrackingOptions visual_objects;  // object clusters (tracking/object_tracker.hpp)
+  ObjectLidarOptions lidar_objects;      // their LiDAR fusion (tracking/object_lidar_options.hpp)
 };
 
 // Each section's fields with their valid ranges (inclusive, the field's unit), visited as
@@ -146,6 +148,7 @@ void for_each_section(SlamOptions& o, VisitSection&& visit) {
   visit("map", o.map);
   visit("lidar", o.lidar);
   visit("visual_objects", o.visual_objects);
+  visit("lidar_objects", o.lidar_objects);
 }
 
 // Throws std::invalid_argument naming the option ("tracking.search_radius_px = inf is out of

@@ -43,7 +43,8 @@ System::System(const geometry::StereoCamera& camera, const SlamOptions& options)
                       LevelWeights(frame_builder_.extractor().level_sigma2())),
       local_mapper_(camera, options, LevelWeights(frame_builder_.extractor().level_sigma2())),
       object_tracker_(camera, options.visual_objects, frame_builder_.extractor().scale_factors(),
-                      LevelWeights(frame_builder_.extractor().level_sigma2())) {}
+                      LevelWeights(frame_builder_.extractor().level_sigma2()),
+                      options.lidar_objects) {}
 
 void System::reset() {
   map_.clear();
@@ -59,7 +60,8 @@ void System::reset() {
 
 TrackResult System::track(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
                           const cv::Mat& labels, const Points3& points_c,
-                          const cv::Mat& instances, const cv::Mat& flow) {
+                          const cv::Mat& instances, const cv::Mat& flow,
+                          const std::vector<objects::Detection>& detections) {
   TrackResult result;
   Frame frame;
   const ObjectTrackingOptions& vo = options_.visual_objects;
@@ -110,7 +112,7 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
   const bool track_objects = tracked && (!instances.empty() || !object_tracker_.tracks().empty());
   if (track_objects) {
     result.objects = object_tracker_.track(frame, instances, flow, road_up_w_, labels,
-                                           road_plane_.plane());
+                                           road_plane_.plane(), detections);
     if (result.is_keyframe) object_tracker_.mark_keyframe(frame.index, options_.local_ba.window);
     timer.lap("objects");
   }

@@ -12,6 +12,7 @@
 
 #include "geometry/stereo_camera.hpp"
 #include "map/map.hpp"
+#include "objects/detection.hpp"
 #include "objects/road_plane.hpp"
 #include "tracking/camera_tracker.hpp"
 #include "tracking/frame_builder.hpp"
@@ -54,11 +55,13 @@ class System {
   // labels: empty or CV_32SC1 class ids per pixel; points_c: the frame's LiDAR scan (N x 3,
   // frame c; empty: none), used for keypoint depth when options.lidar.use_depth;
   // instances: empty or CV_32SC1 panoptic instance ids (0: none) and flow: empty or CV_32FC2
-  // optical flow from the previous frame, both for visual object tracking.
+  // optical flow from the previous frame, both for visual object tracking; detections: the
+  // frame's 3D boxes (camera frame) for the LiDAR fusion of the object tracking.
   // Throws std::invalid_argument on bad sizes.
   TrackResult track(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
                     const cv::Mat& labels = cv::Mat(), const Points3& points_c = Points3(),
-                    const cv::Mat& instances = cv::Mat(), const cv::Mat& flow = cv::Mat());
+                    const cv::Mat& instances = cv::Mat(), const cv::Mat& flow = cv::Mat(),
+                    const std::vector<objects::Detection>& detections = {});
 
   // T_w_c of every frame tracked so far, refined through the keyframes.
   std::vector<std::pair<TrajectoryEntry, Mat4>> trajectory() const;

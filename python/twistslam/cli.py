@@ -14,6 +14,8 @@ import sys
 import warnings
 from pathlib import Path
 
+from .eval_detections_cli import add_eval_detections
+
 
 def _iou(text: str) -> float:
     value = float(text)
@@ -125,13 +127,14 @@ def _run_run(args: argparse.Namespace) -> int:
         sequence = open_sequence(args.root, args.seq, split=args.split)
     if args.no_images and not args.detections:
         raise ValueError("--no-images needs --detections (objects from detections alone)")
-    if args.detections:
+    if args.no_images:
         return _run_objects(args, config, sequence)
     from .pipeline import run
 
     result = run(sequence, config, progress=not args.no_progress,
                  segmentation=args.segmentation, flow=args.flow, viz=args.viz,
-                 viz_save=args.viz_save, segmentation_weights=_segmentation_weights(args))
+                 viz_save=args.viz_save, segmentation_weights=_segmentation_weights(args),
+                 detections=args.detections, detector=args.detector)
     paths = result.save(args.out)
     t = result.timings.summary()
     print(f"{result.seq or args.root}: {len(result)} frames, {t['hz']:.1f} Hz "
@@ -154,10 +157,6 @@ def _run_objects(args: argparse.Namespace, config, sequence) -> int:
     """``run --detections DIR --no-images``: 3D multi-object tracking from detections."""
     from .objects import track_detections
 
-    if not args.no_images:
-        raise ValueError("--detections without --no-images: tracking objects inside the stereo "
-                         "SLAM is not available yet; add --no-images to track from the "
-                         "detections alone")
     result = track_detections(sequence, args.detections, config)
     paths = result.save(args.out)
     n_tracks = sum(o.reported.any() for o in result.objects)
@@ -190,8 +189,14 @@ def _add_run(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--detections", metavar="DIR",
                    help="3D detections: DIR/SEQ.txt (PointRCNN comma format or KITTI tracking "
-                   "results) or DIR/SEQ/NNNNNN.txt (KITTI object results); with --no-images, "
-                   "writes OUT/tracking/SEQ.txt (objects tracked from the detections alone)")
+                   "results) or DIR/SEQ/NNNNNN.txt (KITTI object results), for the masks "
+                   "from boxes and the LiDAR fusion (default: the sequence's detections/*/); "
+                   "with --no-images, writes OUT/tracking/SEQ.txt (objects tracked from the "
+                   "detections alone)")
+    p.add_argument("--detector", default="auto", choices=["auto", "files", "none"],
+                   help="3D detections of the LiDAR fusion of object tracking (canonical pose, "
+                   "size, e_det): files (--detections or the sequence's), none (the camera "
+                   "alone); auto: files when there are any (default: auto)")
     p.add_argument("--no-images", action="store_true",
                    help="do not run the stereo SLAM (objects from --detections only)")
     p.add_argument("--segmentation", default="auto",
@@ -238,6 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run(sub)
     _add_eval(sub)
     _add_sim(sub)
+    add_eval_detections(sub)
     return parser
 
 

@@ -2,7 +2,7 @@
 
 A :class:`Config` is one dataclass per section (``orb``, ``stereo``, ``tracking``,
 ``keyframes``, ``local_ba``, ``map``, ``run``, ``objects``, ``lidar``,
-``visual_objects``). Each field carries its unit and the reason for
+``visual_objects``, ``lidar_objects``). Each field carries its unit and the reason for
 its default (``dataclasses.fields(...)[i].metadata``), and both are written as comments into
 the YAML that :meth:`Config.to_yaml` saves beside every result. The C++ core receives all
 sections but ``run`` and ``objects`` (read by the object tracker) as the nested dictionary
@@ -32,6 +32,7 @@ from ._settings import coerce, param
 from .config_lidar import PYTHON_ONLY as _LIDAR_PYTHON_ONLY
 from .config_lidar import LidarConfig
 from .config_objects import ObjectsConfig
+from .config_lidar_objects import LidarObjectsConfig
 from .config_visual_objects import VisualObjectsConfig
 
 
@@ -201,6 +202,7 @@ SECTIONS: dict[str, type] = {
     "objects": ObjectsConfig,
     "lidar": LidarConfig,
     "visual_objects": VisualObjectsConfig,
+    "lidar_objects": LidarObjectsConfig,
 }
 #: sections the SLAM system does not read (the object tracker reads ``objects`` itself)
 _NOT_FOR_CORE = ("run", "objects")
@@ -226,6 +228,7 @@ class Config:
     objects: ObjectsConfig = field(default_factory=ObjectsConfig)
     lidar: LidarConfig = field(default_factory=LidarConfig)
     visual_objects: VisualObjectsConfig = field(default_factory=VisualObjectsConfig)
+    lidar_objects: LidarObjectsConfig = field(default_factory=LidarObjectsConfig)
 
     def __post_init__(self) -> None:
         self.validate()

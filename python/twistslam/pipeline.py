@@ -25,6 +25,7 @@ from .input_checks import check_first_frames
 from .progress import RateBar
 from .objects.visual import visual_objects
 from .result import Result
+from .perception.detection import Detections3D
 from .perception.run_stages import Perception, perception_stages
 from .slam import Slam
 from .timings import Timings
@@ -59,6 +60,7 @@ class _Loaded:
     instance_ids: np.ndarray | None
     flow: np.ndarray | None
     stage_ms: dict[str, float]
+    detections: Detections3D | None = None
 
 
 def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | None,
@@ -91,8 +93,13 @@ def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | Non
             start = time.perf_counter()
             flow = perception.optical_flow(previous[0], frame)
             ms["flow"] = (time.perf_counter() - start) * 1e3
+        detections = None
+        if perception.detector is not None:
+            start = time.perf_counter()
+            detections = perception.detect(frame)
+            ms["detection"] = (time.perf_counter() - start) * 1e3
         previous[0] = frame
-        return _Loaded(frame, class_ids, instance_ids, flow, ms)
+        return _Loaded(frame, class_ids, instance_ids, flow, ms, detections)
 
     with ThreadPoolExecutor(max_workers=1) as pool:
         pending = pool.submit(load, indices[0]) if len(indices) else None
@@ -116,7 +123,7 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         progress: bool = True, *, segmentation: Any = "auto", flow: Any = "auto",
         detections: Any = None, flow_weights: str | Path | None = None,
         segmentation_weights: dict | None = None, viz: bool = False,
-        viz_save: str | Path | None = None) -> Result:
+        viz_save: str | Path | None = None, detector: Any = "auto") -> Result:
     """Track the camera and every object cluster through a stereo sequence.
 
     Parameters
@@ -137,8 +144,13 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         Optical flow source for the object search: ``"auto"`` (files, else DIS), ``"files"``,
         ``"dis"``, ``"raft"`` (with ``flow_weights``), ``"none"``, or a callable.
     detections
-        3D detections for ``segmentation="boxes"`` (a file, folder or ObjectTable); default:
-        the sequence's ``detections/<name>/SEQ.txt``.
+        Precomputed 3D detections (a file, folder or ObjectTable) for ``segmentation="boxes"``
+        and ``detector="files"``; default: the sequence's ``detections/<name>/SEQ.txt``.
+    detector
+        3D detections of the LiDAR fusion of object tracking (``config.lidar_objects``:
+        canonical pose, size, e_det): ``"auto"`` (the precomputed detections when there are
+        any, else none), ``"files"``, ``"none"``, or a callable ``frame -> Detections3D``.
+        Only runs with a segmentation.
     flow_weights
         RAFT state-dict file for ``flow="raft"``.
     segmentation_weights
@@ -171,7 +183,9 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         segmentation = "none"
     perception = perception_stages(sequence, segmentation, flow, detections=detections,
                                    flow_weights=flow_weights,
-                                   segmentation_weights=segmentation_weights)
+                                   segmentation_weights=segmentation_weights,
+                                   detector=detector if config.lidar_objects.use_detections
+                                   else "none")
     if (perception.segmentation is not None and config.visual_objects.enabled
             and not config.tracking.dynamic_class_ids):
         # eq. 3: object classes track their clusters, never the camera
@@ -199,7 +213,7 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         for item in _prefetched(sequence, indices, labels, perception,
                                 lidar=config.lidar.use_depth):
             out = slam.track(item.frame, item.class_ids, instances=item.instance_ids,
-                             flow=item.flow)
+                             flow=item.flow, detections=item.detections)
             now = time.perf_counter()
             frame_ms.append((now - last) * 1e3)
             last = now
@@ -233,6 +247,7 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
                  if perception.segmentation is not None else None),
         segmentation=perception.segmentation_name,
         flow=perception.flow_name,
+        detector=perception.detector_name,
     )
 
 

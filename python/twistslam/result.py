@@ -65,6 +65,7 @@ class Result:
     objects: "VisualObjects | None" = None
     segmentation: str = "none"
     flow: str = "none"
+    detector: str = "none"
 
     def __len__(self) -> int:
         return len(self.frames)

@@ -17,6 +17,8 @@ import numpy as np
 from . import geometry
 from .config import Config
 from .datasets import Calibration, Frame
+from .perception.detection import Detections3D
+from .perception.panoptic_from_boxes import KITTI_TO_CITYSCAPES
 
 #: what the core reports per frame
 STATUSES = ("initialized", "ok", "lost", "relocalized")
@@ -44,6 +46,17 @@ class TrackedFrame:
     timings_ms: dict[str, float] = field(default_factory=dict)
     num_objects_tracked: int = 0  # object clusters with a valid twist in this frame
     num_object_points: int = 0    # their matched inlier points
+
+
+def _detection_arrays(detections: Detections3D) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Boxes, scores and panoptic class ids of the detections whose KITTI type has a panoptic
+    class (``KITTI_TO_CITYSCAPES``)."""
+    if not isinstance(detections, Detections3D):
+        raise TypeError(f"detections: expected Detections3D, got {type(detections).__name__}")
+    class_ids = np.array([KITTI_TO_CITYSCAPES.get(str(c), -1) for c in detections.classes],
+                         dtype=np.int64)
+    keep = class_ids >= 0
+    return detections.boxes[keep], detections.scores[keep], class_ids[keep]
 
 
 def _new_system(camera, options: dict[str, Any]):
@@ -138,7 +151,8 @@ class Slam:
         return self._system
 
     def track(self, frame: Frame, labels: np.ndarray | None = None, *,
-              instances: np.ndarray | None = None, flow: np.ndarray | None = None) -> TrackedFrame:
+              instances: np.ndarray | None = None, flow: np.ndarray | None = None,
+              detections: Detections3D | None = None) -> TrackedFrame:
         """Track one stereo frame.
 
         Parameters
@@ -155,6 +169,11 @@ class Slam:
         flow
             Optional ``(H, W, 2)`` float32 optical flow from the previous frame's left image
             (NaN: unknown), where object tracking starts its search.
+        detections
+            Optional 3D detections of the frame (boxes in its camera frame): the LiDAR fusion
+            of object tracking (``config.lidar_objects``) gives the clusters their canonical
+            pose, size and the e_det twist. KITTI types map to the panoptic classes (a van is
+            a car); a type without one is ignored.
 
         Raises
         ------
@@ -193,8 +212,13 @@ class Slam:
         if self.config.lidar.use_depth and frame.points_c is not None:
             scan = np.asarray(frame.points_c)[:, :3]
 
+        boxes = scores = class_ids = None
+        if detections is not None:
+            boxes, scores, class_ids = _detection_arrays(detections)
+
         start = time.perf_counter()
-        out = system.track(i, float(frame.timestamp), left, right, labels, scan, instances, flow)
+        out = system.track(i, float(frame.timestamp), left, right, labels, scan, instances, flow,
+                           boxes, scores, class_ids)
         track_ms = (time.perf_counter() - start) * 1e3
 
         T_w_c = np.asarray(out["T_w_c"], dtype=np.float64).reshape(4, 4)

@@ -50,12 +50,14 @@ class FakeSystem:
         FakeSystem.instances.append(self)
 
     def track(self, index, timestamp, image_left, image_right, labels, points_c=None,
-              instances=None, flow=None):
+              instances=None, flow=None, boxes=None, scores=None, class_ids=None):
         self.calls.append(dict(index=index, timestamp=timestamp, shape=image_left.shape,
                                labels=None if labels is None else labels.copy(),
                                points_c=None if points_c is None else points_c.shape,
                                instances=None if instances is None else instances.copy(),
-                               flow=None if flow is None else flow.shape))
+                               flow=None if flow is None else flow.shape,
+                               boxes=None if boxes is None else np.array(boxes),
+                               class_ids=None if class_ids is None else np.array(class_ids)))
         blank = image_left.min() == image_left.max() or image_right.min() == image_right.max()
         if blank:
             status = "lost"

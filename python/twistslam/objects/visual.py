@@ -2,8 +2,10 @@
 KITTI tracking boxes.
 
 A cluster's object frame is the one the core gave it at birth: world axes (identity rotation)
-at the centroid of its first points, so ``T_w_o`` is not a canonical box pose (detections give
-canonical frames with LiDAR fusion). Its box is fitted to its points in that frame: yaw about
+at the centroid of its first points, so ``T_w_o`` is not a canonical box pose, until a 3D
+detection is associated with it (LiDAR fusion, ``config.lidar_objects``): then the frame is
+that box's (canonical pose) and its size the boxes' median. Without one, its box is fitted to
+its points in that frame: yaw about
 the frame's y axis (the first camera's "down") from the principal axis of the points' x-z
 coordinates, extents between the 5th and 95th percentile along each box axis (robust to the
 few background points a mask lets in). Reported frames are those with a valid twist (eq. 4).
@@ -112,7 +114,11 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
         frames = np.asarray(c["frames"])
         T_w_o = np.asarray(c["T_w_o"]).reshape(-1, 4, 4)
         points = np.asarray(c["points_o"]).reshape(-1, 3)
-        T_o_box, size = box_from_points(points)
+        if c.get("canonical") and (np.asarray(c["size"]) > 0).all():
+            # the object frame is its first detection's box frame; size: the boxes' median
+            T_o_box, size = np.eye(4), np.asarray(c["size"], dtype=np.float64)
+        else:
+            T_o_box, size = box_from_points(points)
         cls = KITTI_TYPES.get(int(c["class_id"]), "Misc")
         T_w_box = T_w_o @ T_o_box
         # the core's flag: a valid twist or a re-seed from the instance seen this frame

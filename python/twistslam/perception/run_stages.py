@@ -8,6 +8,10 @@ its 3D detections and LiDAR scans when it has both, else none), ``"files"``, ``"
 ``flow``: ``"auto"`` (files when present, else OpenCV DIS), ``"files"``, ``"dis"``, ``"raft"``
 (needs ``flow_weights``), ``"none"`` / ``None``, or any callable ``(previous, current) ->
 (H, W, 2)``. Flow only serves object tracking: without segmentation no flow is computed.
+``detector``: the 3D detections of the LiDAR fusion (``config.lidar_objects``): ``"auto"`` (the
+detections the masks come from, else the sequence's detection files, else none), ``"files"``,
+``"none"`` / ``None``, or any callable ``frame -> Detections3D``. Like flow, it only serves
+object tracking.
 """
 
 from __future__ import annotations
@@ -19,12 +23,14 @@ from typing import Any
 
 import numpy as np
 
+from .detection import Detections3D
 from .flow import FLOW_KINDS, flow_source
 from .panoptic import Panoptic
 from .panoptic_source import check_panoptic, panoptic_source
 from .stage import check_flow
 
 SEGMENTATION_KINDS = ("auto", "files", "boxes", "torch", "none")
+DETECTOR_KINDS = ("auto", "files", "none")
 
 
 def find_detections(sequence) -> Path | None:
@@ -58,6 +64,8 @@ class Perception:
     segmentation_name: str = "none"
     flow_name: str = "none"
     needs_lidar: bool = False
+    detector: Callable[..., Detections3D] | None = None
+    detector_name: str = "none"
 
     def panoptic(self, frame) -> Panoptic | None:
         """The frame's labels; ``None`` when off, or when a file source has no file for this
@@ -73,6 +81,16 @@ class Perception:
                 raise
             return None
         return check_panoptic(result, shape, self.segmentation_name)
+
+    def detect(self, frame) -> Detections3D | None:
+        """The frame's 3D detections, ``None`` when off."""
+        if self.detector is None:
+            return None
+        result = self.detector(frame)
+        if not isinstance(result, Detections3D):
+            raise TypeError(f"detector '{self.detector_name}': expected Detections3D from frame "
+                            f"{frame.index}, got {type(result).__name__}")
+        return result
 
     def optical_flow(self, previous, current) -> np.ndarray | None:
         if self.flow is None or previous is None:
@@ -114,9 +132,43 @@ def _segmentation(kind, sequence, detections, weights=None) -> tuple[Callable | 
     return panoptic_source("boxes", sequence, boxes=table), "boxes", True
 
 
+class TableDetections:
+    """Detection stage over precomputed boxes of a whole sequence (an ObjectTable): a frame
+    without rows has no detections."""
+
+    def __init__(self, table) -> None:
+        self.table = table
+
+    def __call__(self, frame) -> Detections3D:
+        rows = self.table.in_frame(int(frame.index))
+        return Detections3D(rows.box_3d, rows.score, np.asarray(rows.cls, dtype=object))
+
+
+def _detector(kind, sequence, detections, segmentation_name: str) -> tuple[Callable | None, str]:
+    if kind is None or kind == "none" or segmentation_name == "none":
+        return None, "none"
+    if callable(kind):
+        return kind, getattr(kind, "__name__", type(kind).__name__)
+    if kind not in DETECTOR_KINDS:
+        raise ValueError(f"detector '{kind}': expected one of {', '.join(DETECTOR_KINDS)} or a "
+                         "callable frame -> Detections3D")
+    from ..objects.detections_input import load_detections
+
+    if detections is None:
+        detections = find_detections(sequence)
+    if detections is None:
+        if kind == "auto":
+            return None, "none"
+        raise FileNotFoundError(f"detector 'files': {sequence} has no detections/<name>/"
+                                f"{getattr(sequence, 'seq', '')}.txt; pass detections=")
+    table = load_detections(detections, str(getattr(sequence, "seq", "")), len(sequence))
+    return TableDetections(table), "files"
+
+
 def perception_stages(sequence, segmentation: Any = "auto", flow: Any = "auto", *,
                       detections: Any = None, flow_weights: str | Path | None = None,
-                      segmentation_weights: dict | None = None) -> Perception:
+                      segmentation_weights: dict | None = None,
+                      detector: Any = "none") -> Perception:
     """The segmentation and flow stages for ``sequence`` (see the module docstring).
     ``segmentation_weights``: the files of ``segmentation="torch"``, ``{"maskrcnn": FILE,
     "semantic": FILE}`` (see :func:`~.panoptic_source.panoptic_source`).
@@ -132,14 +184,15 @@ def perception_stages(sequence, segmentation: Any = "auto", flow: Any = "auto", 
     """
     seg, seg_name, needs_lidar = _segmentation(segmentation, sequence, detections,
                                                segmentation_weights)
+    detect, detect_name = _detector(detector, sequence, detections, seg_name)
     if seg is None or flow is None or flow == "none":
-        return Perception(seg, None, seg_name, "none", needs_lidar)
+        return Perception(seg, None, seg_name, "none", needs_lidar, detect, detect_name)
     if callable(flow):
         return Perception(seg, flow, seg_name, getattr(flow, "__name__", type(flow).__name__),
-                          needs_lidar)
+                          needs_lidar, detect, detect_name)
     if flow not in FLOW_KINDS:
         raise ValueError(f"flow '{flow}': expected one of {', '.join(FLOW_KINDS)}, 'none' "
                          "or a callable (previous, current) -> (H, W, 2)")
     stage = flow_source(flow, sequence, weights=flow_weights)
     name = type(stage).__name__.replace("Flow", "").lower() or flow
-    return Perception(seg, stage, seg_name, name, needs_lidar)
+    return Perception(seg, stage, seg_name, name, needs_lidar, detect, detect_name)

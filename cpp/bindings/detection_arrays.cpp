@@ -1,0 +1,38 @@
+#include "bindings/detection_arrays.hpp"
+
+#include <cstdint>
+#include <string>
+
+namespace twistslam::bindings {
+
+std::vector<objects::Detection> detections_from_arrays(const py::handle& boxes,
+                                                       const py::handle& scores,
+                                                       const py::handle& class_ids,
+                                                       const py::handle& planar) {
+  const DoubleArray b = as_rows(boxes, "boxes", 7);
+  const auto n = b.shape(0);
+  const DoubleArray s = as_double_array(scores, "scores");
+  const auto c = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(class_ids);
+  if (!c) throw py::type_error("class_ids: expected an integer array");
+  py::array_t<bool, py::array::c_style | py::array::forcecast> p;
+  if (!planar.is_none()) {
+    p = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(planar);
+    if (!p) throw py::type_error("planar: expected a boolean array");
+    if (p.ndim() != 1 || p.shape(0) != n)
+      throw py::value_error("planar: expected (" + std::to_string(n) + ",) like boxes, got " +
+                            shape_string(p));
+  }
+  if (s.ndim() != 1 || s.shape(0) != n || c.ndim() != 1 || c.shape(0) != n)
+    throw py::value_error("scores, class_ids: expected (" + std::to_string(n) +
+                          ",) arrays like boxes, got " + shape_string(s) + ", " + shape_string(c));
+  std::vector<objects::Detection> dets(n);
+  for (py::ssize_t i = 0; i < n; ++i) {
+    dets[i].box = geometry::Box3D::from_row(b.data() + 7 * i);
+    dets[i].score = s.data()[i];
+    dets[i].class_id = static_cast<int>(c.data()[i]);
+    dets[i].planar = planar.is_none() ? true : p.data()[i];
+  }
+  return dets;
+}
+
+}  // namespace twistslam::bindings

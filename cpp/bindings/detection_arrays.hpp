@@ -1,0 +1,18 @@
+#pragma once
+// numpy arrays of one frame's 3D detections -> objects::Detection, shared by the detections
+// tracker (objects_bindings.cpp) and the SLAM's LiDAR fusion (slam_bindings.cpp).
+#include <vector>
+
+#include "bindings/numpy_checks.hpp"
+#include "objects/detection.hpp"
+
+namespace twistslam::bindings {
+
+// boxes (N, 7) [cx, cy, cz, l, w, h, ry], scores (N,), class_ids (N,) int, planar (N,) bool
+// or None (all true). ValueError naming the argument for a wrong shape.
+std::vector<objects::Detection> detections_from_arrays(const py::handle& boxes,
+                                                       const py::handle& scores,
+                                                       const py::handle& class_ids,
+                                                       const py::handle& planar);
+
+}  // namespace twistslam::bindings

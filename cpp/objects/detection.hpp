@@ -1,0 +1,15 @@
+#pragma once
+// One 3D detection of a frame, as the detections tracker (tracker.hpp) and the LiDAR fusion
+// of the visual object tracking (tracking/object_detection_fusion.cpp) take it.
+#include "geometry/box3d.hpp"
+
+namespace twistslam::objects {
+
+struct Detection {
+  geometry::Box3D box;  // in the camera frame of its frame (geometric centre, KITTI yaw)
+  double score = 0;
+  int class_id = 0;     // tracks and detections associate within a class only
+  bool planar = true;   // the class moves on the ground plane (planar link), else free
+};
+
+}  // namespace twistslam::objects

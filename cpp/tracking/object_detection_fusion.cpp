@@ -1,0 +1,130 @@
+// 3D detections in the visual object tracking (paper sec. "Injecting LiDAR scans", eq. 5):
+// each frame's boxes are associated one to one with the live clusters (box to cluster within
+// detection_max_distance_m, Hungarian); the first box associated with a cluster sets its
+// canonical object frame (the box frame), later boxes give its size (per-dimension median)
+// and the drift-free twist e_det of the object window (optim/visual_object_window.hpp).
+#include <cmath>
+#include <limits>
+
+#include "geometry/se3.hpp"
+#include "objects/assignment.hpp"
+#include "objects/association.hpp"
+#include "tracking/object_point_helpers.hpp"
+#include "tracking/object_tracker.hpp"
+
+namespace twistslam::tracking {
+using detail::transform;
+
+namespace {
+
+// Distance from p (camera frame) to the box (0 inside): a cluster's points lie on the
+// object's visible faces, up to half a car length from its centre, so the centroid of a car
+// seen from behind is ~2 m from the box centre but inside or at the box.
+double distance_to_box(const geometry::Box3D& box, const Vec3& p_c) {
+  const Mat4 T_c_b = box.pose();
+  const Vec3 p_b = T_c_b.topLeftCorner<3, 3>().transpose() * (p_c - T_c_b.topRightCorner<3, 1>());
+  const Vec3 half(box.length / 2, box.height / 2, box.width / 2);  // box x, y (down), z
+  return (p_b - p_b.cwiseMax(-half).cwiseMin(half)).norm();
+}
+
+}  // namespace
+
+std::vector<int> ObjectTracker::associate_detections(const Frame& frame,
+                                                     const std::vector<int>& clusters,
+                                                     const std::vector<Mat4>& T_w_o) const {
+  std::vector<int> detection_of(clusters.size(), -1);
+  if (detections_.empty() || clusters.empty() || !lidar_options_.use_detections) return detection_of;
+  const double inf = std::numeric_limits<double>::infinity();
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(clusters.size(), detections_.size(), inf);
+  for (size_t i = 0; i < clusters.size(); ++i) {
+    const objects::ObjectTrack& track = tracks_[clusters[i]];
+    const objects::ObjectCluster& cluster = clusters_[clusters[i]];
+    const Mat4 T_c_o = frame.T_c_w * T_w_o[i];
+    Vec3 centroid_o = Vec3::Zero();
+    if (!track.canonical) {
+      if (cluster.points.empty()) continue;
+      for (const objects::ObjectPoint& p : cluster.points) centroid_o += p.X_o;
+      centroid_o /= static_cast<double>(cluster.points.size());
+    }
+    const Vec3 centre_c = transform(T_c_o, centroid_o);
+    for (size_t d = 0; d < detections_.size(); ++d) {
+      if (detection_used_[d] || detections_[d].class_id != track.class_id) continue;
+      const geometry::Box3D& box = detections_[d].box;
+      // a canonical track's origin is its box centre; a cluster's centroid lies on its faces
+      cost(i, d) = track.canonical ? (centre_c - box.center).norm() : distance_to_box(box, centre_c);
+    }
+  }
+  for (const auto& [i, d] : objects::solve_assignment(cost, lidar_options_.detection_max_distance_m))
+    detection_of[i] = d;
+  return detection_of;
+}
+
+void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
+  objects::ObjectTrack& track = tracks_[c];
+  objects::TrackFrame& row = track.last();
+  const objects::Detection& det = detections_[d];
+  detection_used_[d] = 1;
+  Mat4 T_w_box = geometry::se3_inverse(frame.T_c_w) * det.box.pose();
+  if (!track.canonical && lidar_options_.canonical_pose) {
+    make_canonical(c, T_w_box);
+    track.canonical_frame = row.frame;
+  } else {
+    // the same box turned by pi is the same object: align it with the track's heading (a
+    // non-canonical track's frame has no heading: its previous detection's box has)
+    const Mat4* reference = track.canonical ? &row.T_w_o : nullptr;
+    for (int r = static_cast<int>(track.frames.size()) - 2; r >= 0 && !reference; --r)
+      if (track.frames[r].has_detection()) reference = &track.frames[r].T_w_o_detected;
+    if (reference && objects::heading_flipped(T_w_box, *reference))
+      T_w_box = objects::turned_around(T_w_box);
+  }
+  row.T_w_o_detected = T_w_box;
+  if (track.canonical && !track.heading_from_motion) check_heading_from_motion(c);
+  row.detected_size = Vec3(det.box.length, det.box.width, det.box.height);
+  row.score = det.score;
+  row.confidence = det.score;
+  row.range = det.box.center.norm();
+  row.detection_index = d;
+  track.update_size();
+}
+
+void ObjectTracker::make_canonical(int c, const Mat4& T_w_box) {
+  objects::ObjectTrack& track = tracks_[c];
+  // T_w_o' = T_w_o T_o_o' for every frame: a change of the object frame only, the twists of
+  // eq. 2 (left-multiplied in w) are unchanged; points and the travel axis re-expressed
+  const Mat4 T_o_new = geometry::se3_inverse(track.last().T_w_o) * T_w_box;
+  const Mat4 T_new_o = geometry::se3_inverse(T_o_new);
+  for (objects::TrackFrame& row : track.frames) row.T_w_o = row.T_w_o * T_o_new;
+  for (objects::TrackFrame& row : track.backcast) row.T_w_o = row.T_w_o * T_o_new;
+  for (objects::ObjectPoint& p : clusters_[c].points) p.X_o = transform(T_new_o, p.X_o);
+  track.travel.rotate(T_o_new.topLeftCorner<3, 3>());
+  track.canonical = true;
+}
+
+void ObjectTracker::check_heading_from_motion(int c) {
+  objects::ObjectTrack& track = tracks_[c];
+  const objects::TrackFrame* start = track.at(track.canonical_frame);
+  if (!start || !(lidar_options_.heading_from_motion_m > 0)) return;
+  const Vec3 moved = track.last().T_w_o.topRightCorner<3, 1>() - start->T_w_o.topRightCorner<3, 1>();
+  if (moved.norm() < lidar_options_.heading_from_motion_m) return;
+  track.heading_from_motion = true;
+  if (track.last().T_w_o.block<3, 1>(0, 0).dot(moved) >= 0) return;
+  // a car drives forward: its box frame faced backwards (a LiDAR box's heading is known mod
+  // pi); the frame turns by pi about its y axis, and the boxes aligned with it turn too
+  make_canonical(c, objects::turned_around(track.last().T_w_o));
+  for (objects::TrackFrame& row : track.frames)
+    if (row.has_detection()) row.T_w_o_detected = objects::turned_around(row.T_w_o_detected);
+}
+
+void ObjectTracker::attach_new_cluster_detections(const Frame& frame, int first_new) {
+  std::vector<int> fresh;
+  std::vector<Mat4> poses;
+  for (int c = first_new; c < static_cast<int>(tracks_.size()); ++c) {
+    fresh.push_back(c);
+    poses.push_back(tracks_[c].last().T_w_o);
+  }
+  const std::vector<int> detection_of = associate_detections(frame, fresh, poses);
+  for (size_t i = 0; i < fresh.size(); ++i)
+    if (detection_of[i] >= 0) attach_detection(fresh[i], frame, detection_of[i]);
+}
+
+}  // namespace twistslam::tracking

@@ -1,0 +1,52 @@
+"""The ``lidar_objects`` section of :class:`twistslam.Config`: the LiDAR fusion of the visual
+object tracking (paper sec. "Injecting LiDAR scans", eq. 5-9; C++
+``tracking::ObjectLidarOptions``, cpp/tracking/object_lidar_options.hpp).
+
+It runs when a run has 3D detections (``twistslam.run(..., detector=...)``): each frame's boxes
+are associated with the object clusters; a cluster's first box gives its canonical pose (the
+box frame), the boxes its size (per-dimension median) and the drift-free twist e_det of its
+sliding window.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ._settings import param
+
+
+@dataclass
+class LidarObjectsConfig:
+    """3D detections in the visual object tracking."""
+
+    use_detections: bool = param(True, "associate each frame's 3D detections with the clusters")
+    detection_max_distance_m: float = param(
+        2.0, "the paper's gate: box centre to a canonical cluster's origin, or (before it has a "
+        "box) the cluster centroid's distance to the box, which a car's visible faces keep near "
+        "0 while the centre lies half a car length away", "m")
+    detection_min_score: float = param(
+        -1e9, "detections below this score are ignored; the detector's own threshold decides "
+        "by default (scores are not comparable across detectors)")
+    canonical_pose: bool = param(
+        True, "the first associated box sets the object frame (origin at the box centre, x "
+        "along the length): poses are canonical, not the cluster's first camera-aligned frame")
+    heading_from_motion_m: float = param(
+        3.0, "once a canonical track has moved this far from where its box was first seen, a "
+        "frame whose x axis (front) points against the motion is turned around: a LiDAR box's "
+        "heading may be off by pi (the classical detector's is only known mod pi), a car drives "
+        "forward; 3 m is 10-30 stereo centroid noises", "m")
+    use_detection_twist: bool = param(True, "e_det (eq. 9) in the object window")
+    det_sigma_translation: float = param(
+        0.2, "twist between two boxes: LiDAR box centres scatter by ~0.1-0.15 m (the simulator's "
+        "oracle 0.1 m), a difference of two by sqrt(2) of that", "m/frame")
+    det_sigma_rotation: float = param(
+        0.05, "box headings scatter by 2-3 deg, a difference of two by sqrt(2) of that",
+        "rad/frame")
+    use_detection_pose: bool = param(
+        True, "a weak prior of each canonical pose on its box (not in the paper: twists alone "
+        "let the canonical pose drift; the box is drift-free)")
+    det_pose_sigma_translation: float = param(
+        0.3, "weak: 2-3 times the box centre's scatter, so the twists keep the trajectory's "
+        "shape", "m")
+    det_pose_sigma_rotation: float = param(0.1, "2-3 times the heading scatter", "rad")
+    huber_det: float = param(2.0, "a wrong association or a merged box is an outlier", "sigmas")

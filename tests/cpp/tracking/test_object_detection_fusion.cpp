@@ -1,0 +1,169 @@
+// LiDAR fusion of the visual object tracking (object_detection_fusion.cpp, paper eq. 5): 3D
+// boxes associated with a cluster give it its canonical frame, size and e_det, on the
+// synthetic scenes of tracker_scene.hpp (a car-like cluster whose own frame is a KITTI box
+// frame: x along its 4 m length, y down, z across).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "tracking/tracker_scene.hpp"
+
+using namespace twistslam;
+
+namespace {
+
+constexpr double kLength = 4.0, kWidth = 1.8, kHeight = 1.5;  // the car of make_car
+
+// The car's true box at frame i (as a detector reports it: geometric centre, KITTI yaw),
+// shifted by `offset` and turned by `extra_yaw`, with per-frame size noise.
+objects::Detection true_box(const Car& car, int i, std::mt19937& rng, double extra_yaw = 0,
+                            const Vec3& offset = Vec3::Zero(), int class_id = kCar) {
+  const Mat4 P = car.pose(i);
+  std::normal_distribution<double> size_noise(0.0, 0.05);
+  objects::Detection d;
+  d.box.center = P.topRightCorner<3, 1>() + offset;
+  d.box.length = kLength + size_noise(rng);
+  d.box.width = kWidth + size_noise(rng);
+  d.box.height = kHeight + size_noise(rng);
+  // rot_y(yaw) = exp(y yaw) and the car turns about kUp = -y
+  d.box.yaw = -car.yaw_rate * i + extra_yaw;
+  d.score = 5.0;
+  d.class_id = class_id;
+  return d;
+}
+
+struct Boxes {
+  double extra_yaw = 0;
+  Vec3 offset = Vec3::Zero();
+  int class_id = kCar;
+  int first_frame = 0;   // boxes from this frame on
+  int keypoint_frames = 1000;  // the car's keypoints in frames before this one only
+};
+
+void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Background& background,
+                    int frames, const Boxes& boxes, std::mt19937& rng,
+                    std::vector<tracking::ObjectTrackingReport>* reports) {
+  for (int i = 0; i < frames; ++i) {
+    SceneFrame f(i);
+    if (i < boxes.keypoint_frames) f.add_car(car, i, instance_id(i));
+    f.add_background(background);
+    std::vector<objects::Detection> dets;
+    if (i >= boxes.first_frame)
+      dets.push_back(true_box(car, i, rng, boxes.extra_yaw, boxes.offset, boxes.class_id));
+    reports->push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
+                                     cv::Mat(), Vec4::Zero(), dets));
+  }
+}
+
+// The track's pose at its last frame against the car's box pose, and its points against the
+// car's own points (the canonical frame is the car's frame).
+void expect_canonical(const objects::ObjectTrack& track, const objects::ObjectCluster& cluster,
+                      const Car& car, double max_point_error_m) {
+  ASSERT_TRUE(track.canonical);
+  const auto& last = track.last();
+  const Mat4 truth = car.pose(last.frame);
+  EXPECT_LT((last.T_w_o.topRightCorner<3, 1>() - truth.topRightCorner<3, 1>()).norm(), 0.1);
+  const Mat4 err = geometry::se3_inverse(truth) * last.T_w_o;
+  EXPECT_LT(rotation_angle_deg(err.topLeftCorner<3, 3>()), 1.0);
+  // each cluster point lies where its car point is (descriptors identify them)
+  int compared = 0;
+  for (const objects::ObjectPoint& p : cluster.points)
+    for (size_t k = 0; k < car.X_o.size(); ++k)
+      if (p.descriptor == car.descriptors[k]) {
+        EXPECT_LT((p.X_o - car.X_o[k]).norm(), max_point_error_m);
+        ++compared;
+      }
+  EXPECT_GE(compared, 40);
+}
+
+struct DetectionFusion : ::testing::Test {
+  std::mt19937 rng{4321};
+  Background background = make_background(rng);
+};
+
+TEST_F(DetectionFusion, FirstBoxSetsTheCanonicalFrameAndTheBoxesTheSize) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0.1), 0.02);
+  auto tracker = make_tracker();
+  std::vector<tracking::ObjectTrackingReport> reports;
+  Boxes boxes;
+  boxes.first_frame = 2;  // a cluster that starts without a box gets its frame later
+  run_with_boxes(tracker, car, background, 10, boxes, rng, &reports);
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const objects::ObjectTrack& track = tracker.tracks()[0];
+  EXPECT_EQ(track.canonical_frame, 2);
+  for (const auto& row : track.frames) EXPECT_EQ(row.has_detection(), row.frame >= 2) << row.frame;
+  expect_canonical(track, tracker.clusters()[0], car, 0.05);
+  // the frames before the box keep their world poses in the new frame: the car's
+  EXPECT_LT((track.frames[0].T_w_o.topRightCorner<3, 1>() - car.c0).norm(), 0.1);
+  EXPECT_NEAR(track.size.x(), kLength, 0.1);
+  EXPECT_NEAR(track.size.y(), kWidth, 0.1);
+  EXPECT_NEAR(track.size.z(), kHeight, 0.1);
+  expect_motion(track, car, 0);
+}
+
+TEST_F(DetectionFusion, BoxFacingBackwardsTurnsAroundOnceTheCarHasMoved) {
+  // the detector's heading is off by pi (known mod pi only); the car drives 0.6 m/frame
+  const Car car = make_car(rng, Vec3(-3, 0.5, 16), Vec3(0.6, 0, 0.0), 0.01);
+  auto tracker = make_tracker();
+  std::vector<tracking::ObjectTrackingReport> reports;
+  Boxes boxes;
+  boxes.extra_yaw = M_PI;
+  run_with_boxes(tracker, car, background, 10, boxes, rng, &reports);
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const objects::ObjectTrack& track = tracker.tracks()[0];
+  EXPECT_TRUE(track.heading_from_motion);
+  expect_canonical(track, tracker.clusters()[0], car, 0.05);
+  // the boxes turned with the frame
+  const Vec3 box_x = track.last().T_w_o_detected.block<3, 1>(0, 0);
+  EXPECT_GT(box_x.dot(car.pose(9).block<3, 1>(0, 0)), 0.99);
+}
+
+TEST_F(DetectionFusion, BoxOfAnotherClassOrFarAwayIsNotAssociated) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0.1), 0.02);
+  for (const auto& [offset, class_id] : {std::pair<Vec3, int>{Vec3(0, 0, 5.0), kCar},
+                                        std::pair<Vec3, int>{Vec3::Zero(), 24}}) {
+    auto tracker = make_tracker();
+    std::vector<tracking::ObjectTrackingReport> reports;
+    Boxes boxes;
+    boxes.offset = offset;
+    boxes.class_id = class_id;
+    run_with_boxes(tracker, car, background, 6, boxes, rng, &reports);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    EXPECT_FALSE(track.canonical) << "class " << class_id;
+    for (const auto& row : track.frames) EXPECT_FALSE(row.has_detection());
+    // the cluster's own frame: identity rotation at its first points' centroid
+    EXPECT_TRUE((track.frames[0].T_w_o.topLeftCorner<3, 3>().isIdentity(1e-12)));
+  }
+}
+
+TEST_F(DetectionFusion, BoxesKeepATrackWhoseKeypointsVanish) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0.0), 0.0);
+  auto options = tracking::ObjectTrackingOptions();
+  options.max_misses = 2;
+  Boxes boxes;
+  boxes.keypoint_frames = 5;  // then boxes only (a car the images lose, the LiDAR still sees)
+  for (const bool with_boxes : {true, false}) {
+    auto tracker = make_tracker(options);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    boxes.first_frame = with_boxes ? 0 : 1000;
+    run_with_boxes(tracker, car, background, 10, boxes, rng, &reports);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    if (!with_boxes) {
+      EXPECT_EQ(track.state, objects::TrackState::kDead);
+      continue;
+    }
+    EXPECT_NE(track.state, objects::TrackState::kDead);
+    ASSERT_EQ(track.frames.size(), 10u);
+    for (const auto& row : track.frames) {
+      EXPECT_TRUE(row.reported) << row.frame;
+      EXPECT_LT((row.T_w_o.topRightCorner<3, 1>() - car.pose(row.frame).topRightCorner<3, 1>()).norm(), 0.1)
+          << row.frame;
+    }
+  }
+}
+
+}  // namespace

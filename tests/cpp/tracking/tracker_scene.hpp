@@ -1,0 +1,200 @@
+#pragma once
+// Synthetic scenes of the visual object tracking tests: keypoints that are exact projections
+// of rigid car-like clusters moving on the road plane in front of a static camera, with
+// per-frame panoptic instance ids that change every frame, a static background, the optical
+// flow at the cars' keypoints. Shared by test_object_tracker.cpp and
+// test_object_detection_fusion.cpp (an anonymous namespace: each test file its own copy).
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "common/kitti_camera.hpp"
+#include "common/random_descriptor.hpp"
+#include "geometry/se3.hpp"
+#include "geometry/so3.hpp"
+#include "tracking/object_tracker.hpp"
+
+namespace {
+using namespace twistslam;
+
+const geometry::StereoCamera kCamera = test_scenes::kitti_camera();
+const Vec3 kUp(0, -1, 0);
+constexpr int kCar = 26, kRoad = 7;
+
+using test_scenes::random_descriptor;
+
+// A rigid object: points in its own frame, a descriptor each, pose P_i = (R(yaw_i), c_i) in
+// the world with planar motion about kUp. It drives like a vehicle: its velocity turns with
+// its yaw (constant in its own frame), as the tracker's non-holonomic heading prior expects.
+struct Car {
+  std::vector<Vec3> X_o;
+  std::vector<map::Descriptor> descriptors;
+  Vec3 c0 = Vec3::Zero();
+  Vec3 velocity = Vec3::Zero();  // m/frame, world at frame 0 (turns with the yaw)
+  double yaw_rate = 0;           // rad/frame about kUp
+  int label = kCar;
+
+  Mat4 pose(int i) const {
+    Vec3 c = c0;
+    for (int k = 0; k < i; ++k) c += geometry::so3_exp(kUp * (yaw_rate * k)) * velocity;
+    return geometry::make_pose(geometry::so3_exp(kUp * (yaw_rate * i)), c);
+  }
+  // True world-frame motion from frame i to i + 1: P_{i+1} P_i^-1.
+  Mat4 motion(int i) const { return pose(i + 1) * geometry::se3_inverse(pose(i)); }
+};
+
+Car make_car(std::mt19937& rng, const Vec3& c0, const Vec3& velocity, double yaw_rate,
+             int n = 80) {
+  Car car;
+  car.c0 = c0;
+  car.velocity = velocity;
+  car.yaw_rate = yaw_rate;
+  std::uniform_real_distribution<double> x(-2.0, 2.0), y(-0.75, 0.75), z(-0.9, 0.9);
+  for (int k = 0; k < n; ++k) {
+    car.X_o.emplace_back(x(rng), y(rng), z(rng));
+    car.descriptors.push_back(random_descriptor(rng));
+  }
+  return car;
+}
+
+struct Background {
+  std::vector<Vec3> X_w;
+  std::vector<map::Descriptor> descriptors;
+};
+
+Background make_background(std::mt19937& rng, int n = 50) {
+  Background b;
+  std::uniform_real_distribution<double> u(5, kCamera.width - 6.0), v(5, kCamera.height - 6.0),
+      depth(30, 50);
+  for (int k = 0; k < n; ++k) {
+    b.X_w.push_back(kCamera.backproject(Vec2(u(rng), v(rng)), depth(rng)));
+    b.descriptors.push_back(random_descriptor(rng));
+  }
+  return b;
+}
+
+// A frame under construction, camera at the world origin (T_c_w = I).
+struct SceneFrame {
+  tracking::Frame frame;
+  cv::Mat instances;  // CV_32SC1, 0 = none
+  cv::Mat flow;       // CV_32FC2, NaN where unknown (filled at the car's keypoints)
+  bool mono = false;  // keypoints without a stereo match (the right camera does not see them)
+
+  explicit SceneFrame(int index) {
+    frame.index = index;
+    frame.timestamp = 0.1 * index;
+    instances = cv::Mat::zeros(kCamera.height, kCamera.width, CV_32SC1);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    flow = cv::Mat(kCamera.height, kCamera.width, CV_32FC2, cv::Scalar(nan, nan));
+  }
+
+  // Adds the stereo keypoint of X_c; false when it falls outside the image.
+  bool add_point(const Vec3& X_c, const map::Descriptor& d, int label, int octave) {
+    const Vec2 uv = kCamera.project(X_c);
+    if (X_c.z() <= 0.5 || !kCamera.in_image(uv, 1.0)) return false;
+    auto& k = frame.keypoints;
+    k.uv.push_back(uv);
+    k.octave.push_back(octave);
+    k.u_right.push_back(mono ? -1.0 : kCamera.project_right(X_c).x());
+    k.depth.push_back(mono ? -1.0 : X_c.z() + kCamera.t_left.z());
+    k.descriptors.push_back(d);
+    k.label.push_back(label);
+    frame.usable.push_back(label == kRoad);
+    return true;
+  }
+
+  void add_background(const Background& b) {
+    for (size_t k = 0; k < b.X_w.size(); ++k) add_point(b.X_w[k], b.descriptors[k], kRoad, 0);
+  }
+
+  // The car's keypoints in frame i; its bounding rectangle filled with `instance` (0: no mask);
+  // the flow from frame i - 1 at its keypoints of frame i - 1.
+  void add_car(const Car& car, int i, int instance) {
+    const Mat4 P = car.pose(i), P_prev = car.pose(i - 1);
+    double u0 = 1e9, v0 = 1e9, u1 = -1e9, v1 = -1e9;
+    for (size_t k = 0; k < car.X_o.size(); ++k) {
+      const Vec3 X = P.topLeftCorner<3, 3>() * car.X_o[k] + P.topRightCorner<3, 1>();
+      if (!add_point(X, car.descriptors[k], car.label, static_cast<int>(k % 3))) continue;
+      const Vec2 uv = frame.keypoints.uv.back();
+      u0 = std::min(u0, uv.x()), v0 = std::min(v0, uv.y());
+      u1 = std::max(u1, uv.x()), v1 = std::max(v1, uv.y());
+      const Vec3 X_prev = P_prev.topLeftCorner<3, 3>() * car.X_o[k] + P_prev.topRightCorner<3, 1>();
+      const Vec2 uv_prev = kCamera.project(X_prev);
+      const Vec2 f = uv - uv_prev;
+      // the 2 x 2 pixels around the previous position carry this point's flow (bilinear reads)
+      for (int dy = 0; dy <= 1; ++dy)
+        for (int dx = 0; dx <= 1; ++dx) {
+          const int x = static_cast<int>(std::floor(uv_prev.x())) + dx;
+          const int y = static_cast<int>(std::floor(uv_prev.y())) + dy;
+          if (x >= 0 && y >= 0 && x < flow.cols && y < flow.rows)
+            flow.at<cv::Vec2f>(y, x) = cv::Vec2f(static_cast<float>(f.x()), static_cast<float>(f.y()));
+        }
+    }
+    if (instance > 0 && u1 >= u0) {
+      const cv::Rect box(cv::Point(static_cast<int>(std::floor(u0)) - 2, static_cast<int>(std::floor(v0)) - 2),
+                         cv::Point(static_cast<int>(std::ceil(u1)) + 3, static_cast<int>(std::ceil(v1)) + 3));
+      instances(box & cv::Rect(0, 0, instances.cols, instances.rows)).setTo(instance);
+    }
+  }
+
+  tracking::Frame& finish() {
+    const size_t n = frame.keypoints.size();
+    frame.point_ids.assign(n, -1);
+    frame.outlier.assign(n, 0);
+    frame.grid.build(frame.keypoints.uv, kCamera.width, kCamera.height);
+    return frame;
+  }
+};
+
+tracking::ObjectTracker make_tracker(const tracking::ObjectTrackingOptions& options = {}) {
+  return tracking::ObjectTracker(kCamera, options, {1.0f, 1.2f, 1.44f, 1.728f},
+                                 tracking::LevelWeights({1.0f, 1.44f, 2.07f, 2.99f}));
+}
+
+// Per-frame instance ids that change every frame (never the previous frame's id).
+int instance_id(int i, int offset = 0) {
+  static const int ids[] = {3, 7, 2, 9, 4, 11, 5, 8, 6, 12, 13, 10, 14, 15, 16, 17, 18, 19};
+  return ids[(i + offset) % 18];
+}
+
+double rotation_angle_deg(const Mat3& R) {
+  const double c = std::clamp((R.trace() - 1.0) / 2.0, -1.0, 1.0);
+  return std::acos(c) * 180.0 / M_PI;
+}
+
+// Each consecutive pair of track frames moves like the car (T_{i+1} T_i^-1 vs P_{i+1} P_i^-1).
+void expect_motion(const objects::ObjectTrack& track, const Car& car, int first_frame) {
+  for (size_t r = 0; r + 1 < track.frames.size(); ++r) {
+    const int i = track.frames[r].frame;
+    ASSERT_EQ(track.frames[r + 1].frame, i + 1);
+    const Mat4 est = track.frames[r + 1].T_w_o * geometry::se3_inverse(track.frames[r].T_w_o);
+    const Mat4 truth = car.motion(i - first_frame);
+    const Mat4 err = geometry::se3_inverse(truth) * est;
+    EXPECT_LT((est.topRightCorner<3, 1>() - truth.topRightCorner<3, 1>()).norm(), 0.02)
+        << "frame " << i << " -> " << i + 1;
+    EXPECT_LT(rotation_angle_deg(err.topLeftCorner<3, 3>()), 0.1) << "frame " << i << " -> " << i + 1;
+  }
+}
+
+struct TrackerScene : ::testing::Test {
+  std::mt19937 rng{1234};
+  Background background = make_background(rng);
+};
+
+void run_car(tracking::ObjectTracker& tracker, const Car& car, const Background& background,
+             int frames, bool use_flow, std::vector<tracking::ObjectTrackingReport>* reports) {
+  for (int i = 0; i < frames; ++i) {
+    SceneFrame f(i);
+    f.add_car(car, i, instance_id(i));
+    f.add_background(background);
+    reports->push_back(tracker.track(f.finish(), f.instances, use_flow && i > 0 ? f.flow : cv::Mat(), kUp));
+  }
+}
+
+}  // namespace
