@@ -47,7 +47,7 @@ std::vector<Detection> drop_car_pieces(std::vector<Detection> all) {
 }
 
 ClusterShape shape_of(const std::vector<int>& members, const std::vector<ScenePoint>& pts,
-                      const GroundGrid& ground, const DetectorOptions& o) {
+                      const std::vector<float>& above, const DetectorOptions& o) {
   ClusterShape s;
   s.num_points = static_cast<int>(members.size());
   std::vector<BevPoint> bev;
@@ -57,7 +57,7 @@ ClusterShape shape_of(const std::vector<int>& members, const std::vector<ScenePo
   float road = std::numeric_limits<float>::infinity();
   float top = -std::numeric_limits<float>::infinity(), low = -top;
   for (const int i : members) {
-    road = std::min(road, ground.road_at(pts[i].x, pts[i].z));
+    road = std::min(road, pts[i].up - above[i]);  // the road of the point's bin
     top = std::max(top, pts[i].up);
     low = std::min(low, pts[i].up);
   }
@@ -102,7 +102,7 @@ DetectorResult detect(const Eigen::Ref<const Points3>& points_c, const DetectorO
   t = Clock::now();
   std::vector<Detection> candidates;
   for (const std::vector<int>& members : clusters) {
-    const ClusterShape shape = shape_of(members, scene.points, ground, options);
+    const ClusterShape shape = shape_of(members, scene.points, above, options);
     if (std::optional<Detection> d = classify(shape, options)) candidates.push_back(*d);
   }
   out.detections = drop_car_pieces(std::move(candidates));

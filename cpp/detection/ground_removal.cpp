@@ -44,7 +44,9 @@ GroundGrid estimate_ground(const std::vector<ScenePoint>& points, const Detector
   if (points.empty()) return g;
   const std::size_t cells = static_cast<std::size_t>(g.segments) * g.bins;
   // counting sort of the heights by cell
-  std::vector<int> start(cells + 1, 0), cell(points.size());
+  std::vector<int> start(cells + 1, 0);
+  std::vector<int>& cell = g.point_cell;
+  cell.resize(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     cell[i] = cell_of(g, points[i].x, points[i].z);
     if (cell[i] >= 0) ++start[static_cast<std::size_t>(cell[i]) + 1];
@@ -101,8 +103,13 @@ GroundGrid estimate_ground(const std::vector<ScenePoint>& points, const Detector
 
 std::vector<float> height_above_road(const std::vector<ScenePoint>& points, const GroundGrid& grid) {
   std::vector<float> out(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i)
-    out[i] = points[i].up - grid.road_at(points[i].x, points[i].z);  // -inf road -> +inf
+  const bool cached = grid.point_cell.size() == points.size() && !grid.road_up.empty();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const float road = !cached ? grid.road_at(points[i].x, points[i].z)
+                       : grid.point_cell[i] < 0 ? kUnknown
+                                                : grid.road_up[static_cast<std::size_t>(grid.point_cell[i])];
+    out[i] = points[i].up - road;  // -inf road -> +inf
+  }
   return out;
 }
 

@@ -19,6 +19,9 @@ struct GroundGrid {
   int segments = 0, bins = 0;
   // m, road height (up) per (segment, bin), row-major by segment; -inf for an empty scan
   std::vector<float> road_up;
+  // cell (segment * bins + bin) of every point given to estimate_ground, -1 outside the grid
+  // (kept so that the heights above the road need no second atan2 per point)
+  std::vector<int> point_cell;
 
   // Road height (up, m) at (x, z); -inf outside the grid or for an empty scan.
   float road_at(double x, double z) const;
@@ -27,8 +30,9 @@ struct GroundGrid {
 // The road grid of `points` (see the file comment); options must be valid.
 GroundGrid estimate_ground(const std::vector<ScenePoint>& points, const DetectorOptions& options);
 
-// Height above the road (m) of every point, in the order of `points`; +inf where the road is
-// unknown (an empty road: such points are never obstacles, being above max_object_height_m).
+// Height above the road (m) of every point, in the order of `points` (the points `grid` was
+// estimated from); +inf where the road is unknown (such points are never obstacles, being
+// above max_object_height_m).
 std::vector<float> height_above_road(const std::vector<ScenePoint>& points, const GroundGrid& grid);
 
 }  // namespace twistslam::detection
