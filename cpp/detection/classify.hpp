@@ -29,6 +29,10 @@ struct ClusterShape {
   double road_up = 0;      // m, road height (up = -y) under the cluster (its lowest cell)
   double top_m = 0;        // m, highest return above the road
   double bottom_m = 0;     // m, lowest return above the road
+  // m, extent along the footprint's longer axis of the returns above footprint_max_height_m
+  // (0 without such returns): a car's rear window spans most of its width, a cyclist's torso
+  // a third of the bicycle's length
+  double upper_extent_m = 0;
   int num_points = 0;
 };
 

@@ -68,6 +68,16 @@ ClusterShape shape_of(const std::vector<int>& members, const std::vector<ScenePo
     for (const int i : members) bev.push_back({pts[i].x, pts[i].z});
   }
   s.footprint = fit_rectangle(bev, o);
+  const int long_axis = s.footprint.extent(0) >= s.footprint.extent(1) ? 0 : 1;
+  const BevPoint a = s.footprint.axis_direction(long_axis);
+  float upper_lo = std::numeric_limits<float>::infinity(), upper_hi = -upper_lo;
+  for (const int i : members) {
+    if (pts[i].up - road <= o.footprint_max_height_m) continue;
+    const float t = static_cast<float>(a.x * pts[i].x + a.z * pts[i].z);
+    upper_lo = std::min(upper_lo, t);
+    upper_hi = std::max(upper_hi, t);
+  }
+  s.upper_extent_m = upper_hi >= upper_lo ? upper_hi - upper_lo : 0.0;
   s.road_up = road;
   s.top_m = top - road;
   s.bottom_m = low - road;

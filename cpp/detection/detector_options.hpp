@@ -87,8 +87,7 @@ struct DetectorOptions {
   // occluded; thinner clusters of car height are people.
   double car_min_visible_m = 1.2;
   // m, a footprint whose shorter side is below this shows one face only (a face's returns
-  // spread ~0.2 m: bumper, curved body); with a cyclist's height, such a face no longer than
-  // cyclist_max_length_m is a cyclist seen from the side rather than a car's rear.
+  // spread ~0.2 m: bumper, curved body); see cyclist_max_upper_extent_m.
   double single_face_m = 0.6;
   // m, the tallest car roof: KITTI Car labels are 1.53 +- 0.14 m high, 2.1 m is 4 sigma;
   // taller clusters are vans (their own KITTI class), trucks, bushes. Measured on real KITTI
@@ -105,9 +104,11 @@ struct DetectorOptions {
   double pedestrian_max_length_m = 1.1;  // m, longest footprint side of a walking person
   double cyclist_max_length_m = 2.2;     // m, a bicycle is ~1.8 m long
   double person_max_width_m = 1.0;       // m, shortest footprint side of a person or cyclist
-  // m, a one-face cluster at most cyclist_max_length_m long and taller than this is a
-  // cyclist, not a car's rear: KITTI cyclists average 1.74 m, cars 1.53 m (std 0.14 m).
-  double cyclist_min_height_m = 1.65;
+  // m, a one-face cluster at most cyclist_max_length_m long whose returns above
+  // footprint_max_height_m span less than this along it is a cyclist seen from the side (a
+  // rider's torso and arms: ~0.6 m), not a car's rear (its rear window spans > 1 m). Height
+  // alone cannot tell them apart: KITTI cyclists are 1.74 m high, many cars 1.6-1.8 m.
+  double cyclist_max_upper_extent_m = 0.9;
 
   // --- score ---
   // returns at which the count term of the score reaches 1 - 1/e: a car at ~25 m.
@@ -154,7 +155,7 @@ void for_each_option(DetectorOptions& o, Visit&& visit) {
   visit("pedestrian_max_length_m", o.pedestrian_max_length_m, 0.1, 10.0);
   visit("cyclist_max_length_m", o.cyclist_max_length_m, 0.1, 10.0);
   visit("person_max_width_m", o.person_max_width_m, 0.1, 10.0);
-  visit("cyclist_min_height_m", o.cyclist_min_height_m, 0.0, 10.0);
+  visit("cyclist_max_upper_extent_m", o.cyclist_max_upper_extent_m, 0.0, 10.0);
   visit("score_points_scale", o.score_points_scale, 1.0, 1e6);
   visit("score_edge_distance_m", o.score_edge_distance_m, 0.001, 10.0);
 }

@@ -173,3 +173,32 @@ TEST(BadInput, InvalidOptionsNameTheOption) {
   o.max_range_m = 20;
   EXPECT_THROW(detect(Points3(0, 3), o), std::invalid_argument);
 }
+
+TEST(Detector, CyclistFromTheSideAndATallCarFromBehind) {
+  // a bicycle (1.8 m long, solid up to 1 m) with a rider's torso above its middle, crossing
+  SceneBox bike, rider, van_like;
+  bike.x = rider.x = -4.0;
+  bike.z = rider.z = 12.0;
+  bike.length = 1.8;
+  bike.width = 0.5;
+  bike.height = 1.0;
+  rider.length = 0.5;
+  rider.width = 0.4;
+  rider.height = 0.75;
+  rider.lift = 1.0;
+  // a car as tall as a cyclist (1.8 m) straight ahead, seen from behind
+  van_like.z = 16.0;
+  van_like.yaw = 0.5 * M_PI;
+  van_like.width = 1.8;
+  van_like.height = 1.8;
+  const DetectorResult r = detect(cast_scene({bike, rider, van_like}));
+  ASSERT_EQ(r.detections.size(), 2u);
+  const Detection& car = r.detections[0].cls == ObjectClass::kCar ? r.detections[0] : r.detections[1];
+  const Detection& cyclist = &car == &r.detections[0] ? r.detections[1] : r.detections[0];
+  EXPECT_EQ(car.cls, ObjectClass::kCar);
+  EXPECT_NEAR(car.centre.x(), 0.0, kCentreTolerance);
+  EXPECT_LT(yaw_error_mod_pi(car.yaw, van_like.yaw), kYawTolerance);
+  EXPECT_EQ(cyclist.cls, ObjectClass::kCyclist);
+  EXPECT_NEAR(cyclist.centre.x(), bike.x, 0.4);
+  EXPECT_LT(yaw_error_mod_pi(cyclist.yaw, bike.yaw), kYawTolerance);
+}
