@@ -60,7 +60,7 @@ py::tuple pcl_gicp(const py::handle& source, const py::handle& target, const py:
 void bind_pcl_gicp(py::module_& m) {
   m.def("_pcl_gicp", &pcl_gicp, "source"_a, "target"_a, "T_init"_a = py::none(),
         "max_correspondence_distance_m"_a = 1.0, "max_iterations"_a = 30, "num_neighbors"_a = 20,
-        "transformation_epsilon"_a = 1e-8, "rotation_epsilon"_a = 2e-3, R"doc(
+        "transformation_epsilon"_a = 1e-3, "rotation_epsilon"_a = 1e-3, R"doc(
 PCL's generalized ICP (pcl::GeneralizedIterativeClosestPoint, float points), for the bench only.
 
 Parameters
@@ -72,7 +72,8 @@ T_init : (4, 4) array or None
 max_correspondence_distance_m, max_iterations, num_neighbors
     As in our GICP (num_neighbors is PCL's correspondence randomness: k of the covariances).
 transformation_epsilon, rotation_epsilon
-    PCL's own convergence thresholds (squared translation change, 1 - cos of the angle change).
+    PCL's convergence thresholds: the largest change of a translation entry (m) and of a
+    rotation matrix entry (~rad) between iterations.
 
 Returns
 -------

@@ -1,6 +1,7 @@
 #include "registration/gicp.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "geometry/se3.hpp"
@@ -127,27 +128,51 @@ GicpResult gicp(const GicpScan& source, const GicpScan& target, const Mat4& T_in
   Mat4 T = T_init;
   std::vector<int> neighbor_of(source.points.size(), -1);
   result.status = GicpStatus::kMaxIterations;
+  // Backtracking: nearest-neighbour correspondences change between iterations, and on real
+  // scans plain Gauss-Newton can then cycle between two estimates ~1 mm apart (measured on
+  // 0001: 4 in 10 consecutive pairs never met the thresholds). A step that raises the mean
+  // cost is undone and retried at half length.
+  Mat4 T_accepted = T;
+  Vec6 step = Vec6::Zero();
+  double accepted_mean_cost = std::numeric_limits<double>::infinity();
+  auto small = [&](const Vec6& d) {
+    return d.head<3>().norm() < options.convergence_translation_m &&
+           d.tail<3>().norm() < options.convergence_rotation_rad;
+  };
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
     result.iterations = iteration;
     const Linearization lin = linearize(source, target, T, options, &neighbor_of);
-    result.num_inliers = lin.num_inliers;
     if (lin.num_inliers < options.min_correspondences) {
+      result.num_inliers = lin.num_inliers;
       result.status = GicpStatus::kTooFewCorrespondences;
       break;
     }
+    const double mean_cost = lin.cost / lin.num_inliers;
+    if (mean_cost > accepted_mean_cost) {
+      step *= 0.5;
+      T = geometry::se3_exp(step) * T_accepted;
+      if (small(step)) {
+        T = T_accepted;
+        result.status = GicpStatus::kConverged;
+        break;
+      }
+      continue;
+    }
+    T_accepted = T;
+    accepted_mean_cost = mean_cost;
+    result.num_inliers = lin.num_inliers;
     result.cost = lin.cost;
     result.rmse_m = std::sqrt(lin.sum_squared_error_m2 / lin.num_inliers);
     result.information = lin.H;
     const Mat6 H = Pi * lin.H * Pi + locked;
     const Eigen::LDLT<Mat6> ldlt(H);
-    const Vec6 delta = Pi * ldlt.solve(-(Pi * lin.b));
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !delta.allFinite()) {
+    step = Pi * ldlt.solve(-(Pi * lin.b));
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !step.allFinite()) {
       result.status = GicpStatus::kDegenerate;
       break;
     }
-    T = geometry::se3_exp(delta) * T;
-    if (delta.head<3>().norm() < options.convergence_translation_m &&
-        delta.tail<3>().norm() < options.convergence_rotation_rad) {
+    T = geometry::se3_exp(step) * T;
+    if (small(step)) {
       result.status = GicpStatus::kConverged;
       break;
     }
