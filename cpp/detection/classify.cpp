@@ -58,7 +58,7 @@ std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o)
     length_axis = along_ray > M_SQRT1_2 ? long_axis : 1 - long_axis;
   }
   if (rear_or_front && short_side < o.single_face_m && long_side <= o.cyclist_max_length_m &&
-      s.top_m >= o.person_min_height_m && s.upper_extent_m < o.cyclist_max_upper_extent_m)
+      s.top_m >= o.cyclist_min_height_m && s.upper_extent_m < o.cyclist_max_upper_extent_m)
     return std::nullopt;  // a cyclist seen from the side (see classify)
   BevRectangle box = f;
   box.extend_away_from_sensor(length_axis, o.car_length_m);

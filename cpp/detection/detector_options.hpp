@@ -104,11 +104,16 @@ struct DetectorOptions {
   double pedestrian_max_length_m = 1.1;  // m, longest footprint side of a walking person
   double cyclist_max_length_m = 2.2;     // m, a bicycle is ~1.8 m long
   double person_max_width_m = 1.0;       // m, shortest footprint side of a person or cyclist
-  // m, a one-face cluster at most cyclist_max_length_m long whose returns above
-  // footprint_max_height_m span less than this along it is a cyclist seen from the side (a
-  // rider's torso and arms: ~0.6 m), not a car's rear (its rear window spans > 1 m). Height
-  // alone cannot tell them apart: KITTI cyclists are 1.74 m high, many cars 1.6-1.8 m.
+  // m, a one-face cluster at most cyclist_max_length_m long, at least cyclist_min_height_m
+  // high, whose returns above footprint_max_height_m span less than this along it is a
+  // cyclist seen from the side (a rider's torso and arms: ~0.6 m), not a car's rear (its
+  // rear window spans > 1 m). Height alone cannot tell them apart: KITTI cyclists are 1.74 m
+  // high, many cars 1.6-1.8 m.
   double cyclist_max_upper_extent_m = 0.9;
+  // m, see cyclist_max_upper_extent_m: a far car's rear window often returns nothing (glass),
+  // its upper returns then look narrow; cars of 1.5 m and less stay cars. On real KITTI
+  // (object frames) the extent alone turned an occluded car at 30 m (1.37 m) into a cyclist.
+  double cyclist_min_height_m = 1.5;
 
   // --- score ---
   // returns at which the count term of the score reaches 1 - 1/e: a car at ~25 m.
@@ -156,6 +161,7 @@ void for_each_option(DetectorOptions& o, Visit&& visit) {
   visit("cyclist_max_length_m", o.cyclist_max_length_m, 0.1, 10.0);
   visit("person_max_width_m", o.person_max_width_m, 0.1, 10.0);
   visit("cyclist_max_upper_extent_m", o.cyclist_max_upper_extent_m, 0.0, 10.0);
+  visit("cyclist_min_height_m", o.cyclist_min_height_m, 0.0, 10.0);
   visit("score_points_scale", o.score_points_scale, 1.0, 1e6);
   visit("score_edge_distance_m", o.score_edge_distance_m, 0.001, 10.0);
 }
