@@ -32,6 +32,10 @@ GicpScan make_gicp_scan(const Eigen::Ref<const Points3>& points, int num_neighbo
 
 enum class RobustKernel { kNone, kHuber };
 
+// GicpOptions' default neighbour count as a compile-time constant (GicpOptions holds an Eigen
+// matrix, so it is not a literal type and GicpOptions().num_neighbors is not constexpr).
+inline constexpr int kDefaultNumNeighbors = 20;
+
 struct GicpOptions {
   // Source / target pairs farther apart (after the current estimate) are not correspondences.
   // 1 m: a car at 10 Hz moves < 3 m per frame and the prediction removes most of it; 0.25-1 m
@@ -47,7 +51,7 @@ struct GicpOptions {
   // Neighbours per covariance (itself included); used when gicp() builds the scans. 20
   // (small_gicp's default): 10 and 30 were less accurate on the bench's real-known and
   // simulated pairs (median rotation error 0.15-0.16 vs 0.14 deg; 0.41-0.57 vs 0.36 deg).
-  int num_neighbors = 20;
+  int num_neighbors = kDefaultNumNeighbors;
   RobustKernel kernel = RobustKernel::kNone;
   // Huber threshold on the Mahalanobis residual sqrt(e^T C^-1 e) (C has unit in-plane
   // variance, so this is m along a plane and ~sqrt(eps) m across it). Off by default: Huber
