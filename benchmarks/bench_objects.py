@@ -14,9 +14,9 @@ on the simulator's sequence, ``.cache/sim/SCENARIO-seedS-nF``, generated when mi
 * ``dis``: OpenCV DIS flow instead of the flow files;
 * ``boxes-seg``: instance masks from the oracle detections instead of the panoptic files;
 * ``kp-only`` / ``kp-extra``: ``visual_objects.extra_keypoints`` False / True;
-* ``det``: LiDAR fusion with the simulator's oracle 3D detections (``detector="files"``):
-  canonical poses, sizes, e_det (every other row runs with ``detector="none"``, the camera
-  alone);
+* ``det`` / ``det-reg``: LiDAR fusion with the simulator's oracle 3D detections
+  (``detector="files"``): canonical poses, sizes, e_det, then also GICP of the object scans
+  (e_reg); every other row runs with ``detector="none"`` (the camera alone);
 * ``raft``: RAFT flow (``raft_small``) from the state-dict file ``--raft-weights FILE`` (or
   ``$TWISTSLAM_RAFT_WEIGHTS``) over the first ``--raft-frames`` frames only (default 10: RAFT
   is slow on a CPU), so its object metrics still count every car of the whole sequence and
@@ -91,8 +91,10 @@ ROWS = {r.name: r for r in [
     Row("raft", flow="raft"),
     # e_dyna in the keyframe BA (off by default): the camera columns are the comparison
     Row("dyn-ba", {"local_ba": {"dynamic_objects": True}}),
-    # LiDAR fusion (issue 11): the oracle detections (canonical pose, size, e_det)
-    Row("det", detector="files"),
+    # LiDAR fusion (issue 11) with the oracle detections: + detections (canonical pose, size,
+    # e_det), + detections + registration (e_reg)
+    Row("det", {"lidar_objects": {"use_registration": False}}, detector="files"),
+    Row("det-reg", detector="files"),
 ]}
 #: environment variable naming the RAFT state-dict file when --raft-weights is not given
 RAFT_WEIGHTS_ENV = "TWISTSLAM_RAFT_WEIGHTS"

@@ -118,7 +118,7 @@ bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o)
   // keeping: its origin moves to the new points' centroid, as a new cluster's would, and its
   // one-frame-old points go. An older cluster keeps its points at the predicted pose: they
   // hold its extent (the box until detections give sizes), and the unmatched ones are culled.
-  if (cluster.velocity.isZero()) {
+  if (cluster.velocity.isZero() && !tracks_[c].canonical) {  // a canonical origin is its box's
     T_w_o->topRightCorner<3, 1>() = centroid;
     cluster.points.clear();
   }

@@ -13,6 +13,7 @@
 #include "tracking/object_tracker.hpp"
 
 namespace twistslam::tracking {
+using detail::contains;
 using detail::transform;
 
 namespace {
@@ -115,6 +116,20 @@ void ObjectTracker::check_heading_from_motion(int c) {
     if (row.has_detection()) row.T_w_o_detected = objects::turned_around(row.T_w_o_detected);
 }
 
+int ObjectTracker::free_instance_under(const geometry::Box3D& box) const {
+  if (instances_.empty()) return -1;
+  const Vec3 centre_c = box.center;
+  if (centre_c.z() <= 0.1) return -1;
+  const Vec2 uv = camera_.project(centre_c);
+  if (!camera_.in_image(uv)) return -1;
+  const int instance = instances_.at<int>(static_cast<int>(uv.y()), static_cast<int>(uv.x()));
+  const auto cls = instance_class_.find(instance);
+  if (instance <= 0 || assigned_instances_.count(instance) || cls == instance_class_.end() ||
+      !contains(options_.object_class_ids, cls->second))
+    return -1;
+  return instance;
+}
+
 void ObjectTracker::attach_new_cluster_detections(const Frame& frame, int first_new) {
   std::vector<int> fresh;
   std::vector<Mat4> poses;
@@ -124,7 +139,10 @@ void ObjectTracker::attach_new_cluster_detections(const Frame& frame, int first_
   }
   const std::vector<int> detection_of = associate_detections(frame, fresh, poses);
   for (size_t i = 0; i < fresh.size(); ++i)
-    if (detection_of[i] >= 0) attach_detection(fresh[i], frame, detection_of[i]);
+    if (detection_of[i] >= 0) {
+      attach_detection(fresh[i], frame, detection_of[i]);
+      register_scan(fresh[i], frame);  // its first object scan
+    }
 }
 
 }  // namespace twistslam::tracking

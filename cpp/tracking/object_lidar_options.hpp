@@ -21,6 +21,17 @@ struct ObjectLidarOptions {
   double det_pose_sigma_translation = 0.3; // m
   double det_pose_sigma_rotation = 0.1;    // rad
   double huber_det = 2.0;                  // sigmas
+  // e_reg: GICP between consecutive object scans (the points of the frame's scan inside the
+  // canonical box, enlarged), registration/gicp.hpp
+  bool use_registration = true;
+  double scan_margin_m = 0.3;              // the box grows by this on each side (not below)
+  double scan_ground_clearance_m = 0.15;   // points this close above the box's bottom are road
+  int min_scan_points = 30;                // fewer: no scan this frame
+  double reg_max_rmse_m = 0.3;             // a registration with a larger residual is refused
+  double reg_min_inlier_fraction = 0.5;    // ... or fewer of the scan's points matched
+  double reg_sigma_translation = 0.03;     // m/frame
+  double reg_sigma_rotation = 0.005;       // rad/frame
+  double huber_reg = 2.0;                  // sigmas
 };
 
 template <typename Visit>
@@ -37,6 +48,15 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("det_pose_sigma_translation", o.det_pose_sigma_translation, 1e-6, 1000.0);
   visit("det_pose_sigma_rotation", o.det_pose_sigma_rotation, 1e-6, 10.0);
   visit("huber_det", o.huber_det, 0.0, 1000.0);  // 0: no loss
+  visit("use_registration", o.use_registration, 0, 1);
+  visit("scan_margin_m", o.scan_margin_m, 0.0, 100.0);
+  visit("scan_ground_clearance_m", o.scan_ground_clearance_m, -10.0, 10.0);
+  visit("min_scan_points", o.min_scan_points, 3, 1000000);
+  visit("reg_max_rmse_m", o.reg_max_rmse_m, 1e-6, 100.0);
+  visit("reg_min_inlier_fraction", o.reg_min_inlier_fraction, 0.0, 1.0);
+  visit("reg_sigma_translation", o.reg_sigma_translation, 1e-6, 100.0);
+  visit("reg_sigma_rotation", o.reg_sigma_rotation, 1e-6, 10.0);
+  visit("huber_reg", o.huber_reg, 0.0, 1000.0);
 }
 
 }  // namespace twistslam::tracking

@@ -65,6 +65,7 @@ void ObjectTracker::reset() {
   tracks_.clear();
   clusters_.clear();
   T_c_w_of_frame_.clear();
+  last_scan_.clear();
   next_id_ = 0;
   last_frame_ = -1;
 }
@@ -200,9 +201,18 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
   // same track. Otherwise the instance stays claimed by a failing cluster until it dies
   // (max_misses frames) and only then starts a new track: a gap and a fragmented track.
   Mat4 T_w_o_reseed = T_w_o_pred;
-  const bool reseeded = !valid && instance >= 0 && options_.reseed_after_misses > 0 &&
+  int reseed_instance = instance;
+  // a canonical track its box keeps alive: without an associated instance, the one under the
+  // box is its own (a new cluster started on it would duplicate the object)
+  const bool box_kept = !valid && detection >= 0 && track.canonical;
+  if (box_kept && reseed_instance < 0) reseed_instance = free_instance_under(detections_[detection].box);
+  const bool reseeded = !valid && reseed_instance >= 0 && options_.reseed_after_misses > 0 &&
                         track.misses + 1 >= options_.reseed_after_misses &&
-                        reseed(c, frame, instance, &T_w_o_reseed);
+                        reseed(c, frame, reseed_instance, &T_w_o_reseed);
+  if (reseeded && reseed_instance != instance) {
+    assigned_instances_.insert(reseed_instance);
+    instance = reseed_instance;
+  }
 
   objects::TrackFrame row;
   row.frame = frame.index;
@@ -220,12 +230,11 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     track.misses = 0;
     track.state = objects::TrackState::kConfirmed;
     if (track.confirmed_frame < 0) track.confirmed_frame = frame.index;
-  } else if (detection >= 0 && track.canonical) {
-    // no twist, but a box: the track lives on at the box pose (heading aligned by
-    // attach_detection below), its velocity kept
-    const Mat4 T_w_box = geometry::se3_inverse(frame.T_c_w) * detections_[detection].box.pose();
-    row.T_w_o = objects::heading_flipped(T_w_box, T_w_o_pred) ? objects::turned_around(T_w_box) : T_w_box;
-    track.last().xi = track.Pi * geometry::twist_between(T_w_o_prev, row.T_w_o);
+  } else if (box_kept) {
+    // no twist, but a box: the track lives on from its prediction, which the window then
+    // pulls towards the box (e_det, the pose prior) under e_const: a box alone is a noisy pose
+    row.T_w_o = T_w_o_pred;
+    track.last().xi = track.Pi * cluster.velocity;
     track.misses = 0;
     track.state = objects::TrackState::kConfirmed;
   } else {
@@ -235,7 +244,7 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     track.state = track.misses > options_.max_misses ? objects::TrackState::kDead
                                                       : objects::TrackState::kLost;
   }
-  row.reported = valid || reseeded || (detection >= 0 && track.canonical);
+  row.reported = valid || reseeded || box_kept;
   track.frames.push_back(row);
   if (detection >= 0) attach_detection(c, frame, detection);
   if (reseeded) return false;  // fresh points: no statistics, window or new points this frame
@@ -259,7 +268,8 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
       claimed_by_[m.keypoint] = c;
     }
   }
-  if (valid && options_.window_frames >= 3) refine_window(c);
+  if (valid || box_kept) register_scan(c, frame);
+  if ((valid || box_kept) && options_.window_frames >= 3) refine_window(c);
   if (valid) recenter(c);
   if (valid) add_travel_step(track);
   if (instance >= 0) {
@@ -277,7 +287,8 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
 ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& instances,
                                           const cv::Mat& flow, const Vec3& up_w,
                                           const cv::Mat& labels, const Vec4& road_plane_w,
-                                          const std::vector<objects::Detection>& detections) {
+                                          const std::vector<objects::Detection>& detections,
+                                          const Points3* scan) {
   ObjectTrackingReport report;
   if (!options_.enabled) return report;
   if (!instances.empty() && (instances.type() != CV_32SC1 || instances.cols != camera_.width ||
@@ -291,6 +302,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
     throw std::invalid_argument("labels: expected int32 class ids of the image size");
 
   T_c_w_of_frame_[frame.index] = frame.T_c_w;
+  scan_ = scan && scan->rows() > 0 ? scan : nullptr;
   up_w_ = up_w;
   instances_ = instances;
   labels_ = labels;
@@ -364,6 +376,8 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   instances_.release();
   labels_.release();
   detections_.clear();
+  scan_ = nullptr;
+  drop_stale_scans(frame.index);
   return report;
 }
 

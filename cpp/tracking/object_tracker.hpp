@@ -19,6 +19,7 @@
 // failed on its pose.
 // The state is objects::ObjectTrack (one per cluster) + objects::ObjectCluster (its points).
 #include <map>
+#include <memory>
 #include <opencv2/core/mat.hpp>
 #include <string>
 #include <unordered_set>
@@ -61,10 +62,13 @@ class ObjectTracker : public ObjectBundleTerms {
   // world (zero: none): with both, a vehicle instance with too few stereo points may start a
   // cluster at its ground-contact depth (ground_contact.hpp).
   // detections: the frame's 3D boxes (camera frame; class_id in the panoptic vocabulary).
+  // scan: the frame's LiDAR points (frame c) or nullptr; object scans inside canonical boxes
+  // are registered frame to frame by GICP (e_reg, object_scans.cpp).
   ObjectTrackingReport track(const Frame& frame, const cv::Mat& instances, const cv::Mat& flow,
                              const Vec3& up_w, const cv::Mat& labels = cv::Mat(),
                              const Vec4& road_plane_w = Vec4::Zero(),
-                             const std::vector<objects::Detection>& detections = {});
+                             const std::vector<objects::Detection>& detections = {},
+                             const Points3* scan = nullptr);
 
   // The frame just tracked becomes a keyframe: its object observations are kept for the
   // local BA (e_dyna), the latest max_keyframes per point.
@@ -111,6 +115,14 @@ class ObjectTracker : public ObjectBundleTerms {
   void make_canonical(int c, const Mat4& T_w_box);
   // Once it has moved heading_from_motion_m, a canonical frame facing backwards turns.
   void check_heading_from_motion(int c);
+  // LiDAR registration (object_scans.cpp): cluster c's object scan of this frame (points of
+  // scan_ in its box at its last pose, world frame), GICP against its previous frame's scan:
+  // the registered motion on its last row (e_reg of the window).
+  void register_scan(int c, const Frame& frame);
+  // Scans older than this frame's are never registered again: freed.
+  void drop_stale_scans(int frame_index);
+  // The unassigned object-class instance under the box centre's projection (-1: none).
+  int free_instance_under(const geometry::Box3D& box) const;
   // Clusters from first_new on (started this frame) take the boxes still unused.
   void attach_new_cluster_detections(const Frame& frame, int first_new);
   // Step 4: stereo keypoints of `instance` not claimed yet -> points of cluster c.
@@ -164,6 +176,9 @@ class ObjectTracker : public ObjectBundleTerms {
   Vec4 road_plane_w_ = Vec4::Zero();    // its road plane (zero: none)
   std::vector<objects::Detection> detections_;  // during track(): the frame's boxes (frame c)
   std::vector<char> detection_used_;            // ... associated with a cluster
+  const Points3* scan_ = nullptr;               // during track(): the frame's LiDAR scan (c)
+  struct ObjectScan;                            // object_scans.cpp
+  std::map<int, std::shared_ptr<const ObjectScan>> last_scan_;  // track id -> its latest scan
   int next_id_ = 0;
   int last_frame_ = -1;
   // per keypoint of the current frame

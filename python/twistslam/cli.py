@@ -14,6 +14,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from .detect_cli import add_detect
 from .eval_detections_cli import add_eval_detections
 
 
@@ -134,7 +135,8 @@ def _run_run(args: argparse.Namespace) -> int:
     result = run(sequence, config, progress=not args.no_progress,
                  segmentation=args.segmentation, flow=args.flow, viz=args.viz,
                  viz_save=args.viz_save, segmentation_weights=_segmentation_weights(args),
-                 detections=args.detections, detector=args.detector)
+                 detections=args.detections, detector=args.detector,
+                 detector_weights=args.weights)
     paths = result.save(args.out)
     t = result.timings.summary()
     print(f"{result.seq or args.root}: {len(result)} frames, {t['hz']:.1f} Hz "
@@ -193,10 +195,15 @@ def _add_run(sub: argparse._SubParsersAction) -> None:
                    "from boxes and the LiDAR fusion (default: the sequence's detections/*/); "
                    "with --no-images, writes OUT/tracking/SEQ.txt (objects tracked from the "
                    "detections alone)")
-    p.add_argument("--detector", default="auto", choices=["auto", "files", "none"],
+    p.add_argument("--detector", default="auto",
+                   choices=["auto", "files", "classical", "3dssd", "none"],
                    help="3D detections of the LiDAR fusion of object tracking (canonical pose, "
-                   "size, e_det): files (--detections or the sequence's), none (the camera "
-                   "alone); auto: files when there are any (default: auto)")
+                   "size, e_det, e_reg): files (--detections or the sequence's), classical "
+                   "(the LiDAR detector of the core, no weights), 3dssd (needs --weights), "
+                   "none (the camera alone); auto: files when there are any, else classical "
+                   "when the sequence has scans (default: auto)")
+    p.add_argument("--weights", metavar="FILE", type=Path, default=None,
+                   help="--detector 3dssd: the checkpoint (twistslam train-detector)")
     p.add_argument("--no-images", action="store_true",
                    help="do not run the stereo SLAM (objects from --detections only)")
     p.add_argument("--segmentation", default="auto",
@@ -243,6 +250,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run(sub)
     _add_eval(sub)
     _add_sim(sub)
+    add_detect(sub)
     add_eval_detections(sub)
     return parser
 

@@ -50,3 +50,27 @@ class LidarObjectsConfig:
         "shape", "m")
     det_pose_sigma_rotation: float = param(0.1, "2-3 times the heading scatter", "rad")
     huber_det: float = param(2.0, "a wrong association or a merged box is an outlier", "sigmas")
+    use_registration: bool = param(
+        True, "e_reg (eq. 6-7, 9): GICP between the object scans of consecutive frames (the "
+        "scan's points inside the canonical box)")
+    scan_margin_m: float = param(
+        0.3, "the box grows by this on each side for the object scan: box and pose errors "
+        "(~0.1-0.2 m) must not cut the car's outline off", "m")
+    scan_ground_clearance_m: float = param(
+        0.15, "points this close above the box's bottom are road, not car (LiDAR range noise "
+        "~2 cm, the road plane under a box within ~0.1 m)", "m")
+    min_scan_points: int = param(
+        30, "an object scan with fewer points is not registered: GICP's 20-neighbour "
+        "covariances need several times that")
+    reg_max_rmse_m: float = param(
+        0.3, "a registration whose inlier RMS point distance exceeds this is refused: a LiDAR "
+        "samples a car at 10-30 m every 0.1-0.3 m, so even aligned scans' nearest neighbours "
+        "lie ~0.1 m apart (0.11 m in the tracker's test scan)", "m")
+    reg_min_inlier_fraction: float = param(
+        0.5, "... or one that matched fewer of the new scan's points within GICP's "
+        "correspondence distance (a scan merged with another object's points, a wrong box)")
+    reg_sigma_translation: float = param(
+        0.03, "GICP of car scans: 1-3 cm per pair (benchmarks/bench_gicp.py)", "m/frame")
+    reg_sigma_rotation: float = param(0.005, "GICP of car scans: 0.1-0.3 deg per pair", "rad/frame")
+    huber_reg: float = param(2.0, "a registration to a wrong scan (merged objects) is an "
+                             "outlier", "sigmas")

@@ -123,7 +123,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         progress: bool = True, *, segmentation: Any = "auto", flow: Any = "auto",
         detections: Any = None, flow_weights: str | Path | None = None,
         segmentation_weights: dict | None = None, viz: bool = False,
-        viz_save: str | Path | None = None, detector: Any = "auto") -> Result:
+        viz_save: str | Path | None = None, detector: Any = "auto",
+        detector_weights: str | Path | None = None) -> Result:
     """Track the camera and every object cluster through a stereo sequence.
 
     Parameters
@@ -148,9 +149,11 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         and ``detector="files"``; default: the sequence's ``detections/<name>/SEQ.txt``.
     detector
         3D detections of the LiDAR fusion of object tracking (``config.lidar_objects``:
-        canonical pose, size, e_det): ``"auto"`` (the precomputed detections when there are
-        any, else none), ``"files"``, ``"none"``, or a callable ``frame -> Detections3D``.
-        Only runs with a segmentation.
+        canonical pose, size, e_det, e_reg): ``"auto"`` (the precomputed detections when
+        there are any, else the classical LiDAR detector when the sequence has scans, else
+        none), ``"files"``, ``"classical"``, ``"3dssd"`` (with ``detector_weights``, a 3DSSD
+        checkpoint), ``"none"``, or a callable ``frame -> Detections3D``. Only runs with a
+        segmentation.
     flow_weights
         RAFT state-dict file for ``flow="raft"``.
     segmentation_weights
@@ -185,7 +188,7 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
                                    flow_weights=flow_weights,
                                    segmentation_weights=segmentation_weights,
                                    detector=detector if config.lidar_objects.use_detections
-                                   else "none")
+                                   else "none", detector_weights=detector_weights)
     if (perception.segmentation is not None and config.visual_objects.enabled
             and not config.tracking.dynamic_class_ids):
         # eq. 3: object classes track their clusters, never the camera
@@ -210,8 +213,10 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     tracked, stages, frame_ms = [], [], []
     with RateBar(len(indices), f"seq {name}" if name else "run", enabled=progress) as bar:
         last = time.perf_counter()
-        for item in _prefetched(sequence, indices, labels, perception,
-                                lidar=config.lidar.use_depth):
+        # the scans serve keypoint depth and the registration of object scans (e_reg)
+        lidar = config.lidar.use_depth or (perception.detector is not None
+                                           and config.lidar_objects.use_registration)
+        for item in _prefetched(sequence, indices, labels, perception, lidar=lidar):
             out = slam.track(item.frame, item.class_ids, instances=item.instance_ids,
                              flow=item.flow, detections=item.detections)
             now = time.perf_counter()

@@ -209,7 +209,9 @@ class Slam:
                                  f"{(height, width, 2)}")
         system = self._system_for(frame, labels)
         scan = None
-        if self.config.lidar.use_depth and frame.points_c is not None:
+        # the scan serves keypoint depth, and the registration of object scans (e_reg)
+        registration = detections is not None and self.config.lidar_objects.use_registration
+        if (self.config.lidar.use_depth or registration) and frame.points_c is not None:
             scan = np.asarray(frame.points_c)[:, :3]
 
         boxes = scores = class_ids = None

@@ -9,9 +9,10 @@ its 3D detections and LiDAR scans when it has both, else none), ``"files"``, ``"
 (needs ``flow_weights``), ``"none"`` / ``None``, or any callable ``(previous, current) ->
 (H, W, 2)``. Flow only serves object tracking: without segmentation no flow is computed.
 ``detector``: the 3D detections of the LiDAR fusion (``config.lidar_objects``): ``"auto"`` (the
-detections the masks come from, else the sequence's detection files, else none), ``"files"``,
-``"none"`` / ``None``, or any callable ``frame -> Detections3D``. Like flow, it only serves
-object tracking.
+sequence's detection files, else the classical LiDAR detector when the sequence has scans,
+else none), ``"files"``, ``"classical"``, ``"3dssd"`` (needs ``detector_weights``), ``"none"``
+/ ``None``, or any callable ``frame -> Detections3D``. Like flow, it only serves object
+tracking.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from .panoptic_source import check_panoptic, panoptic_source
 from .stage import check_flow
 
 SEGMENTATION_KINDS = ("auto", "files", "boxes", "torch", "none")
-DETECTOR_KINDS = ("auto", "files", "none")
+DETECTOR_KINDS = ("auto", "files", "classical", "3dssd", "none")
 
 
 def find_detections(sequence) -> Path | None:
@@ -144,7 +145,8 @@ class TableDetections:
         return Detections3D(rows.box_3d, rows.score, np.asarray(rows.cls, dtype=object))
 
 
-def _detector(kind, sequence, detections, segmentation_name: str) -> tuple[Callable | None, str]:
+def _detector(kind, sequence, detections, segmentation_name: str,
+              weights=None) -> tuple[Callable | None, str]:
     if kind is None or kind == "none" or segmentation_name == "none":
         return None, "none"
     if callable(kind):
@@ -153,12 +155,15 @@ def _detector(kind, sequence, detections, segmentation_name: str) -> tuple[Calla
         raise ValueError(f"detector '{kind}': expected one of {', '.join(DETECTOR_KINDS)} or a "
                          "callable frame -> Detections3D")
     from ..objects.detections_input import load_detections
+    from .detection import detection_source
 
+    if kind in ("classical", "3dssd"):
+        return detection_source(kind, weights=weights), kind
     if detections is None:
         detections = find_detections(sequence)
     if detections is None:
         if kind == "auto":
-            return None, "none"
+            return (detection_source("classical"), "classical") if _has_lidar(sequence) else (None, "none")
         raise FileNotFoundError(f"detector 'files': {sequence} has no detections/<name>/"
                                 f"{getattr(sequence, 'seq', '')}.txt; pass detections=")
     table = load_detections(detections, str(getattr(sequence, "seq", "")), len(sequence))
@@ -168,7 +173,7 @@ def _detector(kind, sequence, detections, segmentation_name: str) -> tuple[Calla
 def perception_stages(sequence, segmentation: Any = "auto", flow: Any = "auto", *,
                       detections: Any = None, flow_weights: str | Path | None = None,
                       segmentation_weights: dict | None = None,
-                      detector: Any = "none") -> Perception:
+                      detector: Any = "none", detector_weights: str | Path | None = None) -> Perception:
     """The segmentation and flow stages for ``sequence`` (see the module docstring).
     ``segmentation_weights``: the files of ``segmentation="torch"``, ``{"maskrcnn": FILE,
     "semantic": FILE}`` (see :func:`~.panoptic_source.panoptic_source`).
@@ -184,7 +189,7 @@ def perception_stages(sequence, segmentation: Any = "auto", flow: Any = "auto", 
     """
     seg, seg_name, needs_lidar = _segmentation(segmentation, sequence, detections,
                                                segmentation_weights)
-    detect, detect_name = _detector(detector, sequence, detections, seg_name)
+    detect, detect_name = _detector(detector, sequence, detections, seg_name, detector_weights)
     if seg is None or flow is None or flow == "none":
         return Perception(seg, None, seg_name, "none", needs_lidar, detect, detect_name)
     if callable(flow):
