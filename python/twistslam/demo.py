@@ -146,7 +146,7 @@ def _object_summary(root: Path, result) -> dict:
 
     evaluation = evaluate_object_tracks(result.objects.reported(), result.camera_poses, load_ground_truth(root, SEQ))
     print(f"\nObject clusters ({len(result.objects)} tracked; segmentation {result.segmentation}, "
-          f"flow {result.flow}):")
+          f"flow {result.flow}, 3D detections {result.detector}):")
     print(evaluation.format_table())
     return evaluation.summary()
 
