@@ -16,6 +16,7 @@ from pathlib import Path
 
 from .detect_cli import add_detect
 from .eval_detections_cli import add_eval_detections
+from .train_detector_cli import add_train_detector
 
 
 def _iou(text: str) -> float:
@@ -252,6 +253,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_sim(sub)
     add_detect(sub)
     add_eval_detections(sub)
+    add_train_detector(sub)
     return parser
 
 
