@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -219,3 +220,18 @@ def test_train_detector_command_writes_a_loadable_checkpoint(sim_root, tmp_path)
     assert parser.parse_args(["train-detector", "r", "--seqs", "0", "--out", "o"]).preset == "small"
     with pytest.raises(SystemExit):
         parser.parse_args(["train-detector", "r", "--seqs", "0", "--out", "o", "--epochs", "0"])
+
+
+#: the model shipped in the repository (trained on simulated urban / crowded seeds 0-1)
+SHIPPED_WEIGHTS = (Path(__file__).resolve().parents[2] / "python" / "twistslam" / "perception"
+                   / "torch_models" / "ssd3d_small_sim.pt")
+
+
+def test_shipped_model_finds_the_cars_of_an_unseen_simulated_frame(sim_root):
+    detector = Detector3DSSD(SHIPPED_WEIGHTS)
+    assert detector.training_info["preset"] == "small"
+    frame = KittiTracking(sim_root, "0000")[0]
+    cars = frame.objects_gt.select((frame.objects_gt.cls == "Car") & (frame.objects_gt.box_3d[:, 2] > 5.0))
+    detections = detector(frame)
+    found = np.asarray(box_iou_bev(cars.box_3d, detections.boxes)).max(axis=1, initial=0.0) >= 0.5
+    assert len(cars) >= 3 and found.mean() >= 0.75
