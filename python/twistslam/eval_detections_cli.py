@@ -24,7 +24,7 @@ import errno
 import json
 from pathlib import Path
 
-from .datasets import ObjectTable, read_detections, read_labels, read_object_labels
+from .datasets import ObjectTable, read_detection_file, read_labels, read_object_labels
 from .eval.detection_ap import CLASSES, METRICS, SAMPLINGS, evaluate_detections
 
 Tables = ObjectTable | dict[int, ObjectTable]
@@ -88,23 +88,16 @@ def load_ground_truth(gt: str | Path, seq: str | None = None,
         "object"
 
 
-def _read_detection_file(path: Path) -> ObjectTable:
-    """A tracking result file or a comma-separated detection file, told apart by a comma."""
-    with open(path, encoding="utf-8") as f:
-        first = next((line for line in f if line.strip()), "")
-    return read_detections(path) if "," in first else read_labels(path)
-
-
 def load_detections(dets: str | Path, seq: str | None = None) -> tuple[Tables, bool]:
     """Detections under ``dets`` and whether they came from per-frame files (whose names
     then fix the evaluated frames)."""
     dets = Path(dets)
     if dets.is_file():
-        return _read_detection_file(dets), False
+        return read_detection_file(dets), False
     if not dets.is_dir():
         raise _missing(dets, "detections")
     if seq is not None and (dets / f"{seq}.txt").is_file():
-        return _read_detection_file(dets / f"{seq}.txt"), False
+        return read_detection_file(dets / f"{seq}.txt"), False
     files = _numbered_files(dets)
     if not files:
         raise ValueError(f"{dets}: no detection files NNNNNN.txt"

@@ -7,7 +7,7 @@ Every reader returns numpy arrays or :class:`ObjectTable`; every sequence yields
 
 from .calibration import Calibration, read_calibration, write_calibration
 from .data_root import DATA_ENV, data_path, data_root
-from .detections import DETECTION_CLASSES, read_detections
+from .detections import DETECTION_CLASSES, read_detection_file, read_detections
 from .frame import Frame, Sequence
 from .kitti_tracking import KittiTracking
 from .kitti_object import KittiObject, read_object_labels
@@ -48,6 +48,7 @@ __all__ = [
     "oxts_to_camera_poses",
     "oxts_to_imu_poses",
     "read_calibration",
+    "read_detection_file",
     "read_detections",
     "read_image",
     "read_labels",

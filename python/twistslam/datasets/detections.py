@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._parsing import INT32_MIN, MAX_FRAME, PathLike, iter_lines, parse_error, to_floats, to_int
+from .labels import read_labels
 from .objects import ObjectTable
 
 #: integer class codes of the AB3DMOT detection files
@@ -53,3 +54,12 @@ def read_detections(path: PathLike) -> ObjectTable:
         occlusion=np.full(n, -1), alpha=v[:, 12], box_2d=v[:, 0:4], box_3d=box_3d,
         score=v[:, 4], source=str(path),
     )
+
+
+def read_detection_file(path: PathLike) -> ObjectTable:
+    """One detection file of a whole sequence: the PointRCNN comma format above when its first
+    non-blank line has a comma, else KITTI tracking results (space separated, track ids
+    ignored by the callers). An empty file gives an empty table."""
+    with open(path, encoding="utf-8") as f:
+        first = next((line for line in f if line.strip()), "")
+    return read_detections(path) if "," in first else read_labels(path)

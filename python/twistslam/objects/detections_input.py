@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..datasets import ObjectTable, read_detections, read_tracking_results
+from ..datasets import ObjectTable, read_detection_file
 from ..datasets._parsing import iter_lines, parse_error
 from ..datasets.kitti_object import read_object_labels
 
@@ -49,10 +49,7 @@ def _line_numbers(path: Path) -> list[tuple[Path, int]]:
 
 
 def _read_file(path: Path) -> tuple[ObjectTable, list[tuple[Path, int]]]:
-    with open(path, encoding="utf-8") as f:
-        first = next((line for line in f if line.strip()), "")
-    table = read_detections(path) if "," in first else read_tracking_results(path)
-    return table, _line_numbers(path)
+    return read_detection_file(path), _line_numbers(path)
 
 
 def _locate(source: Path, seq: str) -> Path:

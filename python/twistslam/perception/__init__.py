@@ -4,7 +4,8 @@ into :func:`twistslam.run` (issue 10)."""
 
 from .detection import DETECTION_KINDS, Detections3D, DetectionStage, detection_source
 from .detection_classical import ClassicalDetector
-from .detection_files import FileDetections, read_detection_file
+from ..datasets import read_detection_file
+from .detection_files import FileDetections
 from .flow import DisFlow, DisOptions, FileFlow, flow_source
 from .flow_files import read_flo, read_kitti_flow, write_flo, write_kitti_flow
 from .flow_raft import RaftFlow, load_raft

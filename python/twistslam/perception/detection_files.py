@@ -20,26 +20,11 @@ from __future__ import annotations
 import errno
 from pathlib import Path
 
-from twistslam.datasets import ObjectTable, read_detections, read_labels, read_object_labels
+from twistslam.datasets import ObjectTable, read_detection_file, read_object_labels
 
 from .detection import Detections3D
 
 MISSING_FRAME_RULES = ("error", "empty")
-
-
-def _first_line(path: Path) -> str:
-    with open(path, encoding="utf-8") as f:
-        for line in f:
-            if line.strip():
-                return line
-    return ""
-
-
-def read_detection_file(path: str | Path) -> ObjectTable:
-    """All rows of a one-file detection source: PointRCNN comma format if the first non-blank
-    line has a comma, else KITTI tracking results (an empty file gives an empty table)."""
-    path = Path(path)
-    return read_detections(path) if "," in _first_line(path) else read_labels(path)
 
 
 class FileDetections:

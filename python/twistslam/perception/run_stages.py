@@ -141,8 +141,7 @@ class TableDetections:
         self.table = table
 
     def __call__(self, frame) -> Detections3D:
-        rows = self.table.in_frame(int(frame.index))
-        return Detections3D(rows.box_3d, rows.score, np.asarray(rows.cls, dtype=object))
+        return Detections3D.from_table(self.table.in_frame(int(frame.index)))
 
 
 def _detector(kind, sequence, detections, segmentation_name: str,

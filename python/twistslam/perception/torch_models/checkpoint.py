@@ -17,6 +17,7 @@ import torch
 from .deeplab import SegmentationNet
 from .maskrcnn import MaskRCNN, MaskRCNNShape
 from .resnet import ResNetShape
+from .torch_file import load_torch_file
 
 #: key prefixes of the backbone of each model family
 DETECTOR_BACKBONE = "backbone.body."
@@ -35,14 +36,7 @@ def read_state_dict(path: str | Path, what: str) -> dict[str, torch.Tensor]:
         The file is not a torch file holding a dict of tensors.
     """
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{what} weights: {path} not found (nothing is downloaded; "
-                                "name a state-dict .pth file)")
-    try:
-        state = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as exc:  # unpickling errors of every kind: not a torch file
-        raise ValueError(f"{path}: not a {what} state dict (cannot load it with torch.load: "
-                         f"{type(exc).__name__}: {str(exc)[:160]})") from exc
+    state = load_torch_file(path, f"{what} state dict", "name a state-dict .pth file")
     if isinstance(state, dict) and isinstance(state.get("model"), dict):
         state = state["model"]
     if not isinstance(state, dict) or not state or not all(

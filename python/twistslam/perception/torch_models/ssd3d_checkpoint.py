@@ -20,6 +20,7 @@ import torch
 
 from .ssd3d_config import SSD3DConfig
 from .ssd3d_model import SSD3D
+from .torch_file import load_torch_file
 
 FORMAT_NAME = "twistslam-3dssd"
 FORMAT_VERSION = 1
@@ -49,14 +50,8 @@ def read_checkpoint(path: str | Path) -> dict:
         a newer version.
     """
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"3DSSD weights: {path} not found (nothing is downloaded; train "
-                                "one with `twistslam train-detector` or name a checkpoint file)")
-    try:
-        checkpoint = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as exc:  # unpickling errors of every kind: not a torch file
-        raise ValueError(f"{path}: not a 3DSSD checkpoint (torch.load failed: "
-                         f"{type(exc).__name__}: {str(exc)[:160]})") from exc
+    checkpoint = load_torch_file(path, "3DSSD checkpoint", "train one with `twistslam "
+                                 "train-detector` or name a checkpoint file")
     if not isinstance(checkpoint, dict) or any(key not in checkpoint for key in REQUIRED_KEYS):
         found = sorted(checkpoint)[:8] if isinstance(checkpoint, dict) else type(checkpoint).__name__
         raise ValueError(f"{path}: not a 3DSSD checkpoint (expected a dict with keys "
