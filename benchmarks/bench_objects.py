@@ -16,7 +16,9 @@ on the simulator's sequence, ``.cache/sim/SCENARIO-seedS-nF``, generated when mi
 * ``kp-only`` / ``kp-extra``: ``visual_objects.extra_keypoints`` False / True;
 * ``det`` / ``det-reg``: LiDAR fusion with the simulator's oracle 3D detections
   (``detector="files"``): canonical poses, sizes, e_det, then also GICP of the object scans
-  (e_reg); every other row runs with ``detector="none"`` (the camera alone);
+  (e_reg); ``classical``: the same with the core's classical LiDAR detector instead of the
+  oracle (no precomputed files); every other row runs with ``detector="none"`` (the camera
+  alone);
 * ``raft``: RAFT flow (``raft_small``) from the state-dict file ``--raft-weights FILE`` (or
   ``$TWISTSLAM_RAFT_WEIGHTS``) over the first ``--raft-frames`` frames only (default 10: RAFT
   is slow on a CPU), so its object metrics still count every car of the whole sequence and
@@ -95,6 +97,8 @@ ROWS = {r.name: r for r in [
     # e_det), + detections + registration (e_reg)
     Row("det", {"lidar_objects": {"use_registration": False}}, detector="files"),
     Row("det-reg", detector="files"),
+    # the whole system from raw stereo + LiDAR: the classical LiDAR detector of the core
+    Row("classical", detector="classical"),
 ]}
 #: environment variable naming the RAFT state-dict file when --raft-weights is not given
 RAFT_WEIGHTS_ENV = "TWISTSLAM_RAFT_WEIGHTS"
