@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-torch = pytest.importorskip("torch")
+import torch  # the models extra, installed by make test: a missing torch fails, never skips
 
 from twistslam._core.geometry import box_iou_bev  # noqa: E402
 from twistslam.datasets import KittiTracking  # noqa: E402
