@@ -15,11 +15,18 @@ Two variants of the pose errors of a car:
   Umeyama alignment of their positions onto the ground truth (the SLAM world drifts).
 - **canonical**: the estimate as it is (no offset, no alignment), for tracks whose frame is
   the box frame (issue 11).
+
+Heading: the mean yaw error (:mod:`.object_yaw`, modulo 2 pi) of the main track in each
+compared frame's camera frame, for canonical tracks only (a cluster frame's x axis is not the
+car's length). 3D TP rate and MOTP: :func:`detection_rates` runs ``twistslam eval``'s
+evaluator on the KITTI tracking boxes of a run against the sequence's ``label_02``.
 """
 
 from __future__ import annotations
 
+import tempfile
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -28,6 +35,7 @@ from .object_ground_truth import (  # noqa: F401  (re-exported: callers import t
     SequenceGroundTruth, evaluated_cars, load_ground_truth, selected_frames,
 )
 from .object_poses import track_pose_errors
+from .object_yaw import mean_yaw_error_deg
 from .trajectory import invert, rotation_angle
 
 #: an estimated position within the box grown by this much (m, every side) hits the object:
@@ -111,6 +119,9 @@ class CarTrackRow:
         alignment; ATE in the ground-truth world seen through the estimated cameras).
     est_ids : estimated tracks that hit it, main (most hits) first.
     offset : (4, 4) the removed ``T_off`` (identity when no main track).
+    yaw_deg : mean heading error (deg, modulo 2 pi: a flipped box is 180) of the main track
+        over the compared frames, each in its camera frame; NaN without a main track or
+        when it is not canonical.
     """
 
     gt_id: int
@@ -126,6 +137,7 @@ class CarTrackRow:
     ate_canonical: float
     est_ids: list[int]
     offset: np.ndarray
+    yaw_deg: float = float("nan")
 
 
 @dataclass
@@ -170,19 +182,20 @@ class ObjectTrackEvaluation:
                 "tracked": self.n_tracked, "ghosts": self.n_ghosts,
                 "rpe_t_canonical": self._mean("rpe_t_canonical"),
                 "rpe_r_canonical": self._mean("rpe_r_canonical"),
-                "ate_canonical": self._mean("ate_canonical")}
+                "ate_canonical": self._mean("ate_canonical"), "yaw_deg": self._mean("yaw_deg")}
 
     def format_table(self) -> str:
         """Plain-text table: one line per car, then the means."""
         head = (f"{'gt':>5} {'frames':>6} {'cover':>6} {'cmp':>4} {'path m':>7} {'RPE_t m/m':>10} "
-                f"{'RPE_r deg/m':>11} {'ATE_al m':>9}  est tracks")
+                f"{'RPE_r deg/m':>11} {'ATE_al m':>9} {'yaw deg':>7}  est tracks")
         lines = [head]
         for c in self.cars:
             lines.append(f"{c.gt_id:>5} {c.frames:>6} {c.coverage:>6.2f} {c.n_compared:>4} {c.path_m:>7.1f} "
-                         f"{c.rpe_t:>10.3f} {c.rpe_r:>11.3f} {c.ate_aligned:>9.3f}  "
+                         f"{c.rpe_t:>10.3f} {c.rpe_r:>11.3f} {c.ate_aligned:>9.3f} {c.yaw_deg:>7.2f}  "
                          f"{','.join(map(str, c.est_ids)) or '-'}")
         lines.append(f"{'mean':>5} {len(self.cars):>6} {self.coverage:>6.2f} {'':>4} {'':>7} "
-                     f"{self.rpe_t:>10.3f} {self.rpe_r:>11.3f} {self.ate_aligned:>9.3f}")
+                     f"{self.rpe_t:>10.3f} {self.rpe_r:>11.3f} {self.ate_aligned:>9.3f} "
+                     f"{self._mean('yaw_deg'):>7.2f}")
         lines.append(f"tracked >= {TRACKED_COVERAGE:.0%}: {self.n_tracked}/{len(self.cars)}; "
                      f"ghost tracks ({GHOST_MIN_FRAMES}+ frames): {self.n_ghosts} "
                      f"{self.ghost_ids if self.ghost_ids else ''}".rstrip())
@@ -190,8 +203,10 @@ class ObjectTrackEvaluation:
 
 
 def _car_row(gt: SequenceGroundTruth, car: GtTrack, frames: np.ndarray,
-             mapped: dict[int, tuple], margin_m: float) -> CarTrackRow:
-    """Coverage and errors of one car; ``mapped`` = estimated tracks in the GT world."""
+             mapped: dict[int, tuple], margin_m: float,
+             canonical_ids: set[int] | None = None) -> CarTrackRow:
+    """Coverage and errors of one car; ``mapped`` = estimated tracks in the GT world;
+    ``canonical_ids``: the tracks whose yaw is evaluated (None: every track)."""
     half = car.half_extents()
     row_of = {int(f): k for k, f in enumerate(car.frames)}
     hits: dict[int, set[int]] = {}
@@ -207,7 +222,7 @@ def _car_row(gt: SequenceGroundTruth, car: GtTrack, frames: np.ndarray,
     order = sorted(hits, key=lambda i: (-len(hits[i]), min(hits[i])))
     nan = float("nan")
     values = dict(n_compared=0, path_m=0.0, rpe_t=nan, rpe_r=nan, ate_aligned=nan, rpe_t_canonical=nan,
-                  rpe_r_canonical=nan, ate_canonical=nan, offset=np.eye(4))
+                  rpe_r_canonical=nan, ate_canonical=nan, offset=np.eye(4), yaw_deg=nan)
     if order:
         est_frames, poses, raw = mapped[order[0]]
         common, ei, _ = np.intersect1d(est_frames, frames, return_indices=True)
@@ -222,6 +237,8 @@ def _car_row(gt: SequenceGroundTruth, car: GtTrack, frames: np.ndarray,
                       ate_aligned=aligned.ate_aligned, ate_canonical=canonical.ate,
                       rpe_t_canonical=canonical.rpe_t if per_m else nan,
                       rpe_r_canonical=canonical.rpe_r if per_m else nan, offset=offset)
+        if canonical_ids is None or order[0] in canonical_ids:
+            values["yaw_deg"] = mean_yaw_error_deg(T_c_w @ gt_poses, T_c_w @ poses[ei])
     return CarTrackRow(gt_id=car.track_id, frames=len(frames),
                        coverage=len(covered) / len(frames), est_ids=order, **values)
 
@@ -258,7 +275,8 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
                            max_range_m: float = MAX_RANGE_M,
                            min_box_height_px: float = MIN_BOX_HEIGHT_PX,
                            max_occlusion: int = MAX_OCCLUSION,
-                           max_truncation: int = MAX_TRUNCATION) -> ObjectTrackEvaluation:
+                           max_truncation: int = MAX_TRUNCATION,
+                           canonical_ids=None) -> ObjectTrackEvaluation:
     """Evaluate estimated object tracks against the simulator's ground truth.
 
     Parameters
@@ -273,6 +291,9 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
         ``MAX_OCCLUSION`` (2: however hidden) and ``MAX_TRUNCATION`` (2: however far outside
         the image). Ghosts are judged against every
         ground-truth box, small or not: a track on a hidden car is no ghost.
+    canonical_ids : ids of the estimated tracks whose object frame is their box frame (LiDAR
+        fusion); only their yaw error is evaluated. None: every track's (the caller knows
+        its frames are box frames).
     """
     camera_poses = np.asarray(camera_poses, dtype=np.float64)
     mapped = {}
@@ -282,5 +303,51 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
             mapped[int(obj.track_id)] = (frames, poses, raw)
     cars = evaluated_cars(gt, min_frames, max_range_m, min_box_height_px, max_occlusion,
                           max_truncation)
-    rows = [_car_row(gt, gt.tracks[tid], frames, mapped, margin_m) for tid, frames in cars.items()]
+    canonical = None if canonical_ids is None else {int(i) for i in canonical_ids}
+    rows = [_car_row(gt, gt.tracks[tid], frames, mapped, margin_m, canonical)
+            for tid, frames in cars.items()]
     return ObjectTrackEvaluation(cars=rows, ghost_ids=ghost_tracks(gt, mapped, margin_m))
+
+
+#: difficulty of :func:`detection_rates`: KITTI's moderate level, the frames the pose errors
+#: also evaluate (box >= 25 px, occlusion <= 1; see :mod:`.object_ground_truth`)
+DETECTION_DIFFICULTY = "moderate"
+#: 3D IoU of a true positive: ``twistslam eval``'s default (the paper's object tables)
+DETECTION_IOU = 0.25
+
+
+def detection_rates(root: str | Path, seq: str, tracking, gt_ids=None,
+                    difficulty: str = DETECTION_DIFFICULTY,
+                    iou_threshold: float = DETECTION_IOU) -> dict[int, tuple[float, float]]:
+    """3D TP rate and 3D MOTP (percent) of ground-truth tracks, as ``twistslam eval`` gives them.
+
+    The boxes are written as ``twistslam run --out`` writes them (``tracking/SEQ.txt``, KITTI
+    tracking format) into a temporary results directory, which
+    :func:`~twistslam.eval.evaluate_sequence` scores against ``root``'s ``label_02`` (CLEAR
+    protocol, its matcher; a box is matched in its frame's camera frame, so camera poses do
+    not enter).
+
+    Parameters
+    ----------
+    root : KITTI tracking layout root (``training/label_02``, ``calib``), e.g. a simulated one.
+    seq : sequence name (``"0000"``).
+    tracking : :class:`~twistslam.datasets.ObjectTable` of the estimated boxes (``result.
+        objects.tracking``).
+    gt_ids : ground-truth track ids to keep (None: every evaluated car).
+    difficulty, iou_threshold : see ``DETECTION_DIFFICULTY``, ``DETECTION_IOU``.
+
+    Returns
+    -------
+    ``{gt track id: (tp_3d, motp_3d)}``; a car with frames in the difficulty level and no
+    matched box has TP 0 and MOTP NaN; a car with no frame in the level is absent.
+    """
+    from ..datasets import write_tracking_results
+    from .sequence import evaluate_sequence
+
+    with tempfile.TemporaryDirectory(prefix="twistslam-eval-") as tmp:
+        write_tracking_results(Path(tmp) / "tracking" / f"{seq}.txt", tracking)
+        metrics = evaluate_sequence(root, tmp, seq, iou_threshold=iou_threshold,
+                                    difficulty=difficulty, protocol="clear", score_metrics=False)
+    keep = None if gt_ids is None else {int(i) for i in gt_ids}
+    return {int(o.track_id): (float(o.tp_3d), float(o.motp_3d)) for o in metrics.objects
+            if keep is None or int(o.track_id) in keep}
