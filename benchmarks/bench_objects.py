@@ -31,6 +31,15 @@ of those frames, ghost tracks, camera ATE (m, aligned) and RPE (m/frame, deg/fra
 median flow ms, and the loop's Hz. A row whose config key or run argument does not exist
 yet prints "not available" and the reason.
 
+Issue 11's figures, per row: the canonical ATE / RPE columns (no offset, no alignment), the
+mean yaw error of the canonical tracks (deg, modulo 2 pi), and the 3D TP rate and 3D MOTP
+(percent) of the run's KITTI tracking boxes (what ``twistslam run --out`` writes) scored by
+``twistslam eval``'s evaluator against ``label_02`` (moderate level, IoU 0.25), means over the
+same moving cars. At the end: each row's means over the sequences against the issue's
+targets (met / missed), and the ablation ratio RPE_t det-reg / default (aligned RPE_t: the
+default row's cluster frames are not box frames) per sequence and on the means;
+``--targets`` also prints the targets line after every row.
+
 ``--gt-as-estimate`` skips the SLAM: the camera poses are the ground truth and
 ``result.objects`` the ground-truth tracks of every object in its labelled frames, with an
 identity-rotation-at-centroid-like object frame and per-frame noise (``GT_NOISE_*``), to run
@@ -54,7 +63,7 @@ from twistslam.datasets import read_poses
 from twistslam.demo import MOVABLE_CLASSES, cached_sequence
 from twistslam.eval import evaluate_camera
 from twistslam.eval.object_tracks import (
-    MAX_OCCLUSION, MAX_TRUNCATION, evaluate_object_tracks, load_ground_truth,
+    MAX_OCCLUSION, MAX_TRUNCATION, detection_rates, evaluate_object_tracks, load_ground_truth,
 )
 from twistslam.objects.result import TrackedObject
 from twistslam.objects.visual import VisualObjects
@@ -104,6 +113,16 @@ ROWS = {r.name: r for r in [
 RAFT_WEIGHTS_ENV = "TWISTSLAM_RAFT_WEIGHTS"
 #: frames of the raft row: raft_small takes about a second per KITTI-size pair on a CPU
 RAFT_FRAMES = 10
+
+
+#: issue 11's targets on the moving cars, canonical: (label, summary key, sense, bound, unit)
+TARGETS = [("ATE", "ate_canonical", "<=", 0.12, "m"), ("RPE_t", "rpe_t_canonical", "<=", 0.08, "m/m"),
+           ("RPE_r", "rpe_r_canonical", "<=", 0.2, "deg/m"), ("yaw", "yaw_deg", "<=", 2.0, "deg"),
+           ("TP3D", "tp_3d", ">=", 60.0, "%"), ("MOTP3D", "motp_3d", ">=", 60.0, "%")]
+#: ablation target: the LiDAR terms cut RPE_t by at least half (det-reg / default)
+ABLATION_MAX_RATIO = 0.5
+#: the ablation's rows: keypoints only, and + detection + registration
+ABLATION_ROWS = ("default", "det-reg")
 
 
 class NotAvailable(Exception):
@@ -177,6 +196,78 @@ def gt_as_estimate(gt, rng: np.random.Generator) -> FakeResult:
     return FakeResult(camera_poses=gt.T_w_c.copy(), objects=VisualObjects(objects=objects))
 
 
+def canonical_track_ids(objects) -> set[int]:
+    """Ids of the tracks whose object frame is their box frame (a 3D detection gave it).
+
+    A track's own ``canonical`` flag when it has one; else :func:`twistslam.objects.visual.
+    visual_objects`' rule: a canonical cluster keeps the identity box offset ``T_o_box`` and
+    a positive size (a box fitted to points is never exactly the identity).
+    """
+    out = set()
+    T_o_box = getattr(objects, "T_o_box", {})
+    for obj in objects:
+        flag = getattr(obj, "canonical", None)
+        if flag is None:
+            T = T_o_box.get(obj.track_id)
+            flag = T is not None and np.array_equal(T, np.eye(4)) and bool((obj.size > 0).all())
+        if flag:
+            out.add(int(obj.track_id))
+    return out
+
+
+def issue11_figures(root: Path, result, ev) -> dict[str, float]:
+    """The evaluation summary plus the mean 3D TP rate and MOTP (percent) of its cars."""
+    figures = ev.summary()
+    tracking = getattr(result.objects, "tracking", None)
+    rates = ({} if tracking is None else
+             detection_rates(root, SEQ, tracking, gt_ids=[c.gt_id for c in ev.cars]))
+    for k, key in enumerate(("tp_3d", "motp_3d")):
+        values = np.array([r[k] for r in rates.values()], dtype=np.float64)
+        figures[key] = float(np.nanmean(values)) if np.isfinite(values).any() else float("nan")
+    return figures
+
+
+def targets_line(figures: dict[str, float]) -> str:
+    """``ATE 0.10<=0.12 met, ...``: each issue-11 figure against its target."""
+    items = []
+    for label, key, sense, bound, _ in TARGETS:
+        value = figures.get(key, float("nan"))
+        ok = np.isfinite(value) and (value <= bound if sense == "<=" else value >= bound)
+        items.append(f"{label} {value:.3g}{sense}{bound:g} {'met' if ok else 'MISSED'}")
+    return ", ".join(items)
+
+
+def ablation_ratio(figures: dict[str, dict]) -> float:
+    """RPE_t (aligned) of det-reg over default; NaN when either row is missing."""
+    base, fused = (figures.get(name, {}).get("rpe_t", float("nan")) for name in ABLATION_ROWS)
+    return fused / base if np.isfinite(base) and base > 0 else float("nan")
+
+
+def print_summary(figures: dict[str, dict[str, dict]], rows: list[str]) -> None:
+    """Per row the means over the sequences against the targets; the ablation ratios."""
+    if not figures:
+        return
+    print(f"\nissue 11 targets (means over moving cars, canonical; TP/MOTP 3D in %), means over "
+          f"{len(figures)} sequence(s):")
+    means: dict[str, dict[str, float]] = {}
+    for name in rows:
+        per_seq = [f[name] for f in figures.values() if name in f]
+        if not per_seq:
+            continue
+        means[name] = {key: float(np.nanmean([f.get(key, np.nan) for f in per_seq]))
+                       if any(np.isfinite(f.get(key, np.nan)) for f in per_seq) else float("nan")
+                       for key in ("rpe_t", *[t[1] for t in TARGETS])}
+        print(f"  {name:<10} {targets_line(means[name])}")
+    if all(name in rows for name in ABLATION_ROWS):
+        print(f"ablation: RPE_t (aligned) {ABLATION_ROWS[1]} / {ABLATION_ROWS[0]}, target <= "
+              f"{ABLATION_MAX_RATIO:g} (the LiDAR terms cut it by half):")
+        for label, per_row in figures.items():
+            print(f"  {label:<14} {ablation_ratio(per_row):.2f}")
+        ratio = ablation_ratio(means)
+        verdict = "met" if np.isfinite(ratio) and ratio <= ABLATION_MAX_RATIO else "MISSED"
+        print(f"  {'mean':<14} {ratio:.2f} {verdict}")
+
+
 def per_object_ms(result) -> dict[str, float]:
     """Median over frames of each ``object*`` stage's ms divided by the live tracks."""
     n_frames = len(result.camera_poses)
@@ -200,15 +291,17 @@ def median_stage(result, word: str) -> float:
 
 HEADER = (f"{'scenario':<14} {'row':<10} {'RPE_t':>6} {'RPE_r':>6} {'ATE_al':>6} "
           f"{'tracked':>8} {'ghosts':>6} {'camATE':>7} {'camRPEt':>8} {'camRPEr':>8} "
-          f"{'flow ms':>7} {'Hz':>6}  object ms/obj/frame; canonical RPE_t RPE_r ATE")
+          f"{'flow ms':>7} {'Hz':>6}  object ms/obj/frame; canonical RPE_t RPE_r ATE; "
+          f"yaw deg (canonical tracks); TP3D MOTP3D %")
 
 
-def format_row(label: str, name: str, ev, cam, result) -> str:
+def format_row(label: str, name: str, ev, cam, result, figures: dict[str, float]) -> str:
     obj_ms = ", ".join(f"{k} {v:.2f}" for k, v in per_object_ms(result).items()) or "-"
     return (f"{label:<14} {name:<10} {ev.rpe_t:>6.3f} {ev.rpe_r:>6.3f} {ev.ate_aligned:>6.3f} "
             f"{f'{ev.n_tracked}/{len(ev.cars)}':>8} {ev.n_ghosts:>6} {cam.ate_rmse:>7.3f} "
             f"{cam.rpe_t_mean:>8.4f} {cam.rpe_r_mean:>8.4f} {median_stage(result, 'flow'):>7.1f} "
-            f"{result.timings.hz:>6.1f}  {obj_ms}{canonical_columns(ev)}")
+            f"{result.timings.hz:>6.1f}  {obj_ms}{canonical_columns(ev)}; yaw "
+            f"{figures['yaw_deg']:.2f}; TP3D {figures['tp_3d']:.1f} MOTP3D {figures['motp_3d']:.1f}")
 
 
 def canonical_columns(ev) -> str:
@@ -230,6 +323,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="extra config override for every row")
     parser.add_argument("--cache", type=Path, default=CACHE)
     parser.add_argument("--per-car", action="store_true", help="print each row's per-car table")
+    parser.add_argument("--targets", action="store_true",
+                        help="print issue 11's targets (met / missed) after every row")
     parser.add_argument("--gt-as-estimate", action="store_true",
                         help="debug: noisy ground truth instead of a SLAM run")
     parser.add_argument("--raft-weights", type=Path, metavar="FILE",
@@ -248,6 +343,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"RPE_t m/m, RPE_r deg/m, ATE_al m (means over moving cars); camera ATE m, RPE m and "
           f"deg per frame{'; GROUND TRUTH AS ESTIMATE (debug)' if args.gt_as_estimate else ''}")
     print(HEADER)
+    figures: dict[str, dict[str, dict]] = {}  # sequence label -> row -> issue-11 figures
     for scenario in args.scenarios:
         for seed in args.seeds:
             root = cached_sequence(args.cache, scenario=scenario, frames=args.frames, seed=seed,
@@ -269,11 +365,16 @@ def main(argv: list[str] | None = None) -> int:
                     result = gt_as_estimate(gt, np.random.default_rng(seed))
                 ev = evaluate_object_tracks(result.objects.reported(), result.camera_poses, gt,
                                             max_occlusion=args.max_occlusion,
-                                            max_truncation=args.max_truncation)
+                                            max_truncation=args.max_truncation,
+                                            canonical_ids=canonical_track_ids(result.objects))
                 cam = evaluate_camera(gt_cam, result.camera_poses)
-                print(format_row(label, name, ev, cam, result), flush=True)
+                row_figures = figures.setdefault(label, {})[name] = issue11_figures(root, result, ev)
+                print(format_row(label, name, ev, cam, result, row_figures), flush=True)
+                if args.targets:
+                    print(f"{'':<14} {'targets':<10} {targets_line(row_figures)}")
                 if args.per_car:
                     print(ev.format_table())
+    print_summary(figures, args.rows)
     return 0
 
 
