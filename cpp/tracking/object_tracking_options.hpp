@@ -17,6 +17,11 @@ struct ObjectTrackingOptions {
   std::vector<int> planar_class_ids{26, 27, 28, 29, 30, 31, 32, 33};
   int road_class_id = 7;            // the road cluster gives the planar link's normal
   double road_max_depth_m = 25;     // road keypoints farther than this do not join the plane fit
+  // LiDAR returns on road pixels join the road plane fit (tracking/road_lidar_points.hpp)
+  bool road_lidar_points = false;
+  double road_lidar_max_depth_m = 25;  // m along the optical axis
+  int road_lidar_border_px = 3;        // px: the whole (2 b + 1)^2 window must be road
+  int road_lidar_max_points = 300;     // returns per keyframe
   double flow_radius_px = 4;        // search window around the flow-predicted position
   double projection_radius_px = 12; // ... around the motion-model projection (no flow)
   double refine_radius_px = 3;      // ... of the second pass, around the estimated pose
@@ -74,6 +79,10 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("planar_class_ids", o.planar_class_ids, 0, 65535);
   visit("road_class_id", o.road_class_id, -1, 65535);  // -1: no road cluster
   visit("road_max_depth_m", o.road_max_depth_m, 0.5, 10000.0);
+  visit("road_lidar_points", o.road_lidar_points, 0, 1);
+  visit("road_lidar_max_depth_m", o.road_lidar_max_depth_m, 0.5, 10000.0);
+  visit("road_lidar_border_px", o.road_lidar_border_px, 0, 100);  // px: 100 is a 201 px window
+  visit("road_lidar_max_points", o.road_lidar_max_points, 0, 100000);  // 0: none kept
   visit("flow_radius_px", o.flow_radius_px, 0.0, 2000.0);  // px: 2000 spans any image
   visit("projection_radius_px", o.projection_radius_px, 0.0, 2000.0);
   visit("refine_radius_px", o.refine_radius_px, 0.0, 2000.0);

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "geometry/se3.hpp"
+#include "tracking/road_lidar_points.hpp"
 
 namespace twistslam::tracking {
 namespace {
@@ -140,7 +141,7 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
   }
 
   if (tracked && result.is_keyframe && !labels.empty() && options_.visual_objects.road_class_id >= 0) {
-    add_road_points(frame);
+    add_road_points(frame, labels, points_c);
     timer.lap("road_plane");
   }
 
@@ -155,7 +156,7 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
   return result;
 }
 
-void System::add_road_points(const Frame& frame) {
+void System::add_road_points(const Frame& frame, const cv::Mat& labels, const Points3& points_c) {
   const map::StereoKeypoints& k = frame.keypoints;
   const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
   const ObjectTrackingOptions& vo = options_.visual_objects;
@@ -163,6 +164,13 @@ void System::add_road_points(const Frame& frame) {
   for (size_t i = 0; i < k.size(); ++i) {
     if (k.label[i] != vo.road_class_id || !k.has_depth(i) || k.depth[i] > vo.road_max_depth_m) continue;
     points.push_back(T_w_c.topLeftCorner<3, 3>() * camera_.backproject(k.uv[i], k.depth[i]) + T_w_c.topRightCorner<3, 1>());
+  }
+  if (vo.road_lidar_points && points_c.rows() > 0) {  // the scan's road returns (paper: LiDAR road points)
+    const RoadLidarSelection selection{vo.road_class_id, vo.road_lidar_max_depth_m,
+                                       vo.road_lidar_border_px, vo.road_lidar_max_points};
+    const RoadLidarPoints road = select_road_lidar_points(points_c, camera_, labels, selection);
+    for (Eigen::Index i = 0; i < road.points_c.rows(); ++i)
+      points.push_back(T_w_c.topLeftCorner<3, 3>() * road.points_c.row(i).transpose() + T_w_c.topRightCorner<3, 1>());
   }
   if (points.empty()) return;
   Points3 rows(static_cast<Eigen::Index>(points.size()), 3);

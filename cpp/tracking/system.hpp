@@ -88,10 +88,12 @@ class System {
   // trajectory stores poses relative to it, and it is the keyframe decision's reference.
   int reference_keyframe_ = -1;
   std::vector<TrajectoryEntry> trajectory_;
-  // Road points of each keyframe (stereo keypoints labelled road_class_id) -> the road plane,
-  // whose normal is the planar link's (TwistSLAM: the road cluster's plane). Until a fit is
-  // accepted it is "up" of the first camera (y down).
-  void add_road_points(const Frame& frame);
+  // Road points of each keyframe (stereo keypoints labelled road_class_id, and with
+  // visual_objects.road_lidar_points the scan's returns on road pixels away from the mask's
+  // boundary, tracking/road_lidar_points.hpp) -> the road plane, whose normal is the planar
+  // link's (TwistSLAM: the road cluster's plane). Until a fit is accepted it is "up" of the
+  // first camera (y down).
+  void add_road_points(const Frame& frame, const cv::Mat& labels, const Points3& points_c);
   objects::RoadPlaneEstimator road_plane_;
   Vec3 road_up_w_ = Vec3(0, -1, 0);
 };

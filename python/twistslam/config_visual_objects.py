@@ -37,6 +37,17 @@ class VisualObjectsConfig:
     road_max_depth_m: float = param(
         25.0, "keyframe road keypoints beyond this do not join the road plane fit: at 25 m "
         "a 0.25 px disparity error is 0.4 m of depth, 4x the fit's 0.1 m inlier band", "m")
+    road_lidar_points: bool = param(
+        False, "the frame's LiDAR returns on road pixels join each keyframe's road plane fit "
+        "(paper sec. 'Injecting LiDAR scans'); False: stereo keypoints only (ablation)")
+    road_lidar_max_depth_m: float = param(
+        25.0, "road returns beyond this depth do not join the fit", "m", lo=0.5, hi=10000.0)
+    road_lidar_border_px: int = param(
+        3, "a road return joins only when every pixel within this distance of its pixel is "
+        "road (the class images carry no score: the mask boundary is where labels fail)",
+        "px", lo=0, hi=100)
+    road_lidar_max_points: int = param(
+        300, "road returns per keyframe, spread over the scan", "points", lo=0, hi=100000)
     flow_radius_px: float = param(
         4.0, "search window around the flow-predicted keypoint: DIS flow's error on the "
         "simulator is 0.5 px median, 4 px keeps its tail", "px")
