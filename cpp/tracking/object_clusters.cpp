@@ -216,6 +216,10 @@ void ObjectTracker::refine_window(int c) {
   wo.det_pose_sigma_translation = lidar_options_.det_pose_sigma_translation;
   wo.det_pose_sigma_rotation = lidar_options_.det_pose_sigma_rotation;
   wo.huber_det = lidar_options_.huber_det;
+  wo.use_registration = lidar_options_.use_registration;
+  wo.reg_sigma_translation = lidar_options_.reg_sigma_translation;
+  wo.reg_sigma_rotation = lidar_options_.reg_sigma_rotation;
+  wo.huber_reg = lidar_options_.huber_reg;
   wo.use_heading = options_.nonholonomic;
   wo.lateral_sigma = options_.lateral_sigma_m;
   wo.use_const = options_.use_const;

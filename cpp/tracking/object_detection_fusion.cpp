@@ -79,41 +79,14 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
       T_w_box = objects::turned_around(T_w_box);
   }
   row.T_w_o_detected = T_w_box;
-  if (track.canonical && !track.heading_from_motion) check_heading_from_motion(c);
   row.detected_size = Vec3(det.box.length, det.box.width, det.box.height);
   row.score = det.score;
   row.confidence = det.score;
   row.range = det.box.center.norm();
-  row.detection_index = d;
+  row.detection_index = d;  // before the heading check: a turn turns this frame's box too
+  if (track.canonical && !track.heading_from_motion) check_heading_from_motion(c);
   track.update_size();
-}
-
-void ObjectTracker::make_canonical(int c, const Mat4& T_w_box) {
-  objects::ObjectTrack& track = tracks_[c];
-  // T_w_o' = T_w_o T_o_o' for every frame: a change of the object frame only, the twists of
-  // eq. 2 (left-multiplied in w) are unchanged; points and the travel axis re-expressed
-  const Mat4 T_o_new = geometry::se3_inverse(track.last().T_w_o) * T_w_box;
-  const Mat4 T_new_o = geometry::se3_inverse(T_o_new);
-  for (objects::TrackFrame& row : track.frames) row.T_w_o = row.T_w_o * T_o_new;
-  for (objects::TrackFrame& row : track.backcast) row.T_w_o = row.T_w_o * T_o_new;
-  for (objects::ObjectPoint& p : clusters_[c].points) p.X_o = transform(T_new_o, p.X_o);
-  track.travel.rotate(T_o_new.topLeftCorner<3, 3>());
-  track.canonical = true;
-}
-
-void ObjectTracker::check_heading_from_motion(int c) {
-  objects::ObjectTrack& track = tracks_[c];
-  const objects::TrackFrame* start = track.at(track.canonical_frame);
-  if (!start || !(lidar_options_.heading_from_motion_m > 0)) return;
-  const Vec3 moved = track.last().T_w_o.topRightCorner<3, 1>() - start->T_w_o.topRightCorner<3, 1>();
-  if (moved.norm() < lidar_options_.heading_from_motion_m) return;
-  track.heading_from_motion = true;
-  if (track.last().T_w_o.block<3, 1>(0, 0).dot(moved) >= 0) return;
-  // a car drives forward: its box frame faced backwards (a LiDAR box's heading is known mod
-  // pi); the frame turns by pi about its y axis, and the boxes aligned with it turn too
-  make_canonical(c, objects::turned_around(track.last().T_w_o));
-  for (objects::TrackFrame& row : track.frames)
-    if (row.has_detection()) row.T_w_o_detected = objects::turned_around(row.T_w_o_detected);
+  if (track.canonical_frame != row.frame) refine_canonical(c);
 }
 
 int ObjectTracker::free_instance_under(const geometry::Box3D& box) const {

@@ -13,6 +13,11 @@ struct ObjectLidarOptions {
   double detection_min_score = -1e9;       // detections below this are ignored
   bool canonical_pose = true;              // the first associated box sets the object frame
   double heading_from_motion_m = 3.0;      // travelled this far, a box frame facing backwards turns
+  // the canonical frame re-anchored to the mean offset of all its boxes (objects/box_offset.hpp)
+  bool refine_canonical = true;
+  double refine_min_range_m = 5.0;         // box weight 1 / max(range, this)^2
+  double refine_min_shift_m = 0.01;        // smaller offsets leave the frame as it is
+  double refine_min_turn_rad = 0.002;      // ... and smaller turns
   // e_det and the detection pose prior in the object window (optim/visual_object_window.hpp)
   bool use_detection_twist = true;
   double det_sigma_translation = 0.2;      // m/frame
@@ -41,6 +46,10 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("detection_min_score", o.detection_min_score, -1e9, 1e9);
   visit("canonical_pose", o.canonical_pose, 0, 1);
   visit("heading_from_motion_m", o.heading_from_motion_m, 0.0, 1e6);
+  visit("refine_canonical", o.refine_canonical, 0, 1);
+  visit("refine_min_range_m", o.refine_min_range_m, 0.01, 1000.0);
+  visit("refine_min_shift_m", o.refine_min_shift_m, 0.0, 100.0);
+  visit("refine_min_turn_rad", o.refine_min_turn_rad, 0.0, 10.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);
   visit("det_sigma_translation", o.det_sigma_translation, 1e-6, 100.0);
   visit("det_sigma_rotation", o.det_sigma_rotation, 1e-6, 10.0);

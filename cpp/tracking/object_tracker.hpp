@@ -115,6 +115,8 @@ class ObjectTracker : public ObjectBundleTerms {
   void make_canonical(int c, const Mat4& T_w_box);
   // Once it has moved heading_from_motion_m, a canonical frame facing backwards turns.
   void check_heading_from_motion(int c);
+  // the canonical frame moved to the weighted mean offset of all the track's boxes
+  void refine_canonical(int c);
   // LiDAR registration (object_scans.cpp): cluster c's object scan of this frame (points of
   // scan_ in its box at its last pose, world frame), GICP against its previous frame's scan:
   // the registered motion on its last row (e_reg of the window).

@@ -35,6 +35,19 @@ class LidarObjectsConfig:
         "frame whose x axis (front) points against the motion is turned around: a LiDAR box's "
         "heading may be off by pi (the classical detector's is only known mod pi), a car drives "
         "forward; 3 m is 10-30 stereo centroid noises", "m")
+    refine_canonical: bool = param(
+        True, "each new box re-anchors the canonical frame to the weighted mean offset of all "
+        "the track's boxes to their poses: the first box alone leaves its noise (the "
+        "simulator's oracle ~0.1 m, ~2 deg) in every pose of the track")
+    refine_min_range_m: float = param(
+        5.0, "a box's weight in that mean is 1 / max(range, this)^2: box centres scatter in "
+        "proportion to range (sparser returns); nearer, partial views and truncation, not range, "
+        "limit them", "m")
+    refine_min_shift_m: float = param(
+        0.01, "a mean offset smaller than this (and turned less than refine_min_turn_rad) "
+        "leaves the frame as it is: below the ATE's centimetre, re-expressing every point is "
+        "work for nothing", "m")
+    refine_min_turn_rad: float = param(0.002, "0.1 deg, see refine_min_shift_m", "rad")
     use_detection_twist: bool = param(True, "e_det (eq. 9) in the object window")
     det_sigma_translation: float = param(
         0.2, "twist between two boxes: LiDAR box centres scatter by ~0.1-0.15 m (the simulator's "

@@ -71,6 +71,10 @@ struct Boxes {
   int first_frame = 0;   // boxes from this frame on
   int keypoint_frames = 1000;  // the car's keypoints in frames before this one only
   bool lidar = false;          // the frame's scan of the car goes to the tracker
+  double centre_noise_m = 0;   // per-frame box noise: centre (each axis of the road plane)
+  double yaw_noise_rad = 0;    // ... and heading
+  Vec3 first_offset = Vec3::Zero();  // the first box's own error (on top of the noise)
+  double first_yaw = 0;
 };
 
 void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Background& background,
@@ -81,8 +85,15 @@ void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Back
     if (i < boxes.keypoint_frames) f.add_car(car, i, instance_id(i));
     f.add_background(background);
     std::vector<objects::Detection> dets;
-    if (i >= boxes.first_frame)
-      dets.push_back(true_box(car, i, rng, boxes.extra_yaw, boxes.offset, boxes.class_id));
+    if (i >= boxes.first_frame) {
+      std::normal_distribution<double> unit(0.0, 1.0);
+      const bool first = i == boxes.first_frame;
+      const Vec3 noise = boxes.centre_noise_m * Vec3(unit(rng), 0, unit(rng));
+      dets.push_back(true_box(car, i, rng, boxes.extra_yaw + boxes.yaw_noise_rad * unit(rng) +
+                                               (first ? boxes.first_yaw : 0),
+                              boxes.offset + noise + (first ? boxes.first_offset : Vec3::Zero()),
+                              boxes.class_id));
+    }
     const Points3 scan = boxes.lidar ? car_scan(car, i, rng) : Points3();
     reports->push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
                                      cv::Mat(), Vec4::Zero(), dets, boxes.lidar ? &scan : nullptr));
@@ -150,6 +161,39 @@ TEST_F(DetectionFusion, BoxFacingBackwardsTurnsAroundOnceTheCarHasMoved) {
   // the boxes turned with the frame
   const Vec3 box_x = track.last().T_w_o_detected.block<3, 1>(0, 0);
   EXPECT_GT(box_x.dot(car.pose(9).block<3, 1>(0, 0)), 0.99);
+}
+
+TEST_F(DetectionFusion, LaterBoxesReanchorAFirstBoxsError) {
+  // the first box is 0.3 m and 4 deg off, the later ones scatter by 0.08 m and 1.5 deg: the
+  // canonical frame is the mean of them all, not the first box's error frozen into the track
+  const Car car = make_car(rng, Vec3(-2, 0.5, 14), Vec3(0.4, 0, 0.05), 0.01);
+  Boxes boxes;
+  boxes.centre_noise_m = 0.08;
+  boxes.yaw_noise_rad = 0.025;
+  boxes.first_offset = Vec3(0.2, 0, -0.22);
+  boxes.first_yaw = 0.07;
+  for (const bool refine : {true, false}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.refine_canonical = refine;
+    auto tracker = tracking::ObjectTracker(kCamera, {}, {1.0f, 1.2f, 1.44f, 1.728f},
+                                           tracking::LevelWeights({1.0f, 1.44f, 2.07f, 2.99f}), lidar);
+    std::mt19937 box_rng(7);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    run_with_boxes(tracker, car, background, 25, boxes, box_rng, &reports);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    ASSERT_TRUE(track.canonical);
+    const Mat4 err = geometry::se3_inverse(car.pose(track.last().frame)) * track.last().T_w_o;
+    const double err_m = err.topRightCorner<3, 1>().norm();
+    const double err_deg = rotation_angle_deg(err.topLeftCorner<3, 3>());
+    if (refine) {
+      EXPECT_LT(err_m, 0.08) << err_deg << " deg";
+      EXPECT_LT(err_deg, 1.5);
+    } else {  // the first box's error stays (the weak pose prior moves it a little)
+      EXPECT_GT(err_m, 0.12) << err_deg << " deg";
+      EXPECT_GT(err_deg, 2.0);
+    }
+  }
 }
 
 TEST_F(DetectionFusion, BoxOfAnotherClassOrFarAwayIsNotAssociated) {

@@ -1,0 +1,67 @@
+// The canonical object frame (paper sec. "Injecting LiDAR scans"): the first box associated
+// with a cluster sets its object frame (the box frame); the frame then turns by pi if the car
+// drives backwards in it (a LiDAR box's heading is known mod pi), and is re-anchored to the
+// weighted mean offset of all its boxes (objects/box_offset.hpp): the first box alone leaves
+// its own noise (the simulator's oracle: ~0.1 m, ~2 deg) in every pose of the track.
+#include <algorithm>
+
+#include "geometry/se3.hpp"
+#include "geometry/so3.hpp"
+#include "objects/association.hpp"
+#include "objects/box_offset.hpp"
+#include "tracking/object_point_helpers.hpp"
+#include "tracking/object_tracker.hpp"
+
+namespace twistslam::tracking {
+using detail::transform;
+
+void ObjectTracker::make_canonical(int c, const Mat4& T_w_box) {
+  objects::ObjectTrack& track = tracks_[c];
+  // T_w_o' = T_w_o T_o_o' for every frame: a change of the object frame only, the twists of
+  // eq. 2 (left-multiplied in w) are unchanged; points and the travel axis re-expressed
+  const Mat4 T_o_new = geometry::se3_inverse(track.last().T_w_o) * T_w_box;
+  const Mat4 T_new_o = geometry::se3_inverse(T_o_new);
+  for (objects::TrackFrame& row : track.frames) row.T_w_o = row.T_w_o * T_o_new;
+  for (objects::TrackFrame& row : track.backcast) row.T_w_o = row.T_w_o * T_o_new;
+  for (objects::ObjectPoint& p : clusters_[c].points) p.X_o = transform(T_new_o, p.X_o);
+  track.travel.rotate(T_o_new.topLeftCorner<3, 3>());
+  track.canonical = true;
+}
+
+void ObjectTracker::check_heading_from_motion(int c) {
+  objects::ObjectTrack& track = tracks_[c];
+  const objects::TrackFrame* start = track.at(track.canonical_frame);
+  if (!start || !(lidar_options_.heading_from_motion_m > 0)) return;
+  const Vec3 moved = track.last().T_w_o.topRightCorner<3, 1>() - start->T_w_o.topRightCorner<3, 1>();
+  if (moved.norm() < lidar_options_.heading_from_motion_m) return;
+  track.heading_from_motion = true;
+  if (track.last().T_w_o.block<3, 1>(0, 0).dot(moved) >= 0) return;
+  // a car drives forward: its box frame faced backwards (a LiDAR box's heading is known mod
+  // pi); the frame turns by pi about its y axis, and the boxes aligned with it turn too
+  make_canonical(c, objects::turned_around(track.last().T_w_o));
+  for (objects::TrackFrame& row : track.frames)
+    if (row.has_detection()) row.T_w_o_detected = objects::turned_around(row.T_w_o_detected);
+}
+
+void ObjectTracker::refine_canonical(int c) {
+  objects::ObjectTrack& track = tracks_[c];
+  if (!lidar_options_.refine_canonical || !track.canonical) return;
+  std::vector<objects::BoxOffsetSample> samples;
+  for (const objects::TrackFrame& row : track.frames) {
+    if (!row.has_detection()) continue;
+    // a box centre's noise grows with its range (sparser returns); nearer than the floor,
+    // truncation and partial views, not range, limit it
+    const double sigma_range = std::max(row.range, lidar_options_.refine_min_range_m);
+    samples.push_back({geometry::se3_inverse(row.T_w_o) * row.T_w_o_detected,
+                       1.0 / (sigma_range * sigma_range)});
+  }
+  if (samples.size() < 2) return;
+  const objects::BoxOffset offset = objects::mean_box_offset(samples);
+  if (!offset.valid) return;
+  const double shift_m = offset.T_o_box.topRightCorner<3, 1>().norm();
+  const double turn_rad = geometry::so3_log(offset.T_o_box.topLeftCorner<3, 3>()).norm();
+  if (shift_m < lidar_options_.refine_min_shift_m && turn_rad < lidar_options_.refine_min_turn_rad) return;
+  make_canonical(c, track.last().T_w_o * offset.T_o_box);
+}
+
+}  // namespace twistslam::tracking
