@@ -65,9 +65,10 @@ class _Loaded:
 
 def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | None,
                 perception: Perception, lidar: bool = False) -> Iterator[_Loaded]:
-    """Each frame with its segmentation and flow; frame i+1 is read and segmented, and its flow
-    computed, in a background thread while the caller tracks frame i (the PNG decoder, OpenCV
-    and the core all release the GIL)."""
+    """Each frame with its detections, segmentation and flow; frame i+1 is read, detected and
+    segmented, and its flow computed, in a background thread while the caller tracks frame i
+    (the PNG decoder, OpenCV and the core all release the GIL). The detector runs once per
+    frame: its boxes make the masks from boxes and feed the LiDAR fusion."""
     previous: list[Frame | None] = [None]
     first_shape: list[tuple[int, int] | None] = [None]
 
@@ -83,9 +84,14 @@ def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | Non
             first_shape[0] = shape
         if shape != first_shape[0]:  # a resized frame: Slam.track names it, no stage runs
             return _Loaded(frame, None, None, None, ms)
+        detections = None
+        if perception.detector is not None:  # first: masks from boxes may be made of them
+            start = time.perf_counter()
+            detections = perception.detect(frame)
+            ms["detection"] = (time.perf_counter() - start) * 1e3
         if perception.segmentation is not None:
             start = time.perf_counter()
-            panoptic = perception.panoptic(frame)
+            panoptic = perception.panoptic(frame, detections)
             if panoptic is not None:
                 class_ids, instance_ids = panoptic.class_id, panoptic.instance_id
             ms["segmentation"] = (time.perf_counter() - start) * 1e3
@@ -93,13 +99,9 @@ def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | Non
             start = time.perf_counter()
             flow = perception.optical_flow(previous[0], frame)
             ms["flow"] = (time.perf_counter() - start) * 1e3
-        detections = None
-        if perception.detector is not None:
-            start = time.perf_counter()
-            detections = perception.detect(frame)
-            ms["detection"] = (time.perf_counter() - start) * 1e3
         previous[0] = frame
-        return _Loaded(frame, class_ids, instance_ids, flow, ms, detections)
+        return _Loaded(frame, class_ids, instance_ids, flow, ms,
+                       detections if perception.fuse_detections else None)
 
     with ThreadPoolExecutor(max_workers=1) as pool:
         pending = pool.submit(load, indices[0]) if len(indices) else None
@@ -138,22 +140,27 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         Show a progress bar with the running rate in Hz.
     segmentation
         Panoptic source for the object clusters and the static / dynamic split (eq. 3):
-        ``"auto"`` (the sequence's panoptic files, else masks from its detections and scans,
+        ``"auto"`` (the sequence's panoptic files, else masks from 3D boxes and its scans,
         else none), ``"files"``, ``"boxes"``, ``"torch"`` (with ``segmentation_weights``),
         ``"none"``, or a callable ``frame -> Panoptic`` (:mod:`twistslam.perception.run_stages`).
+        The boxes are the ``detector``'s of the same frame (``Result.segmentation`` e.g.
+        ``"boxes:classical"``), or with ``detector="none"`` the precomputed ``detections``
+        (``"boxes:files"``).
     flow
         Optical flow source for the object search: ``"auto"`` (files, else DIS), ``"files"``,
         ``"dis"``, ``"raft"`` (with ``flow_weights``), ``"none"``, or a callable.
     detections
-        Precomputed 3D detections (a file, folder or ObjectTable) for ``segmentation="boxes"``
-        and ``detector="files"``; default: the sequence's ``detections/<name>/SEQ.txt``.
+        Precomputed 3D detections (a file, folder or ObjectTable) for ``detector="files"`` and
+        for ``segmentation="boxes"`` with ``detector="none"``; default: the sequence's
+        ``detections/<name>/SEQ.txt``.
     detector
         3D detections of the LiDAR fusion of object tracking (``config.lidar_objects``:
         canonical pose, size, e_det, e_reg): ``"auto"`` (the precomputed detections when
         there are any, else the classical LiDAR detector when the sequence has scans, else
         none), ``"files"``, ``"classical"``, ``"3dssd"`` (with ``detector_weights``, a 3DSSD
         checkpoint), ``"none"``, or a callable ``frame -> Detections3D``. Only runs with a
-        segmentation.
+        segmentation; its boxes also make the masks of ``segmentation="boxes"`` (then it runs
+        even with ``config.lidar_objects.use_detections`` off, for the masks alone).
     flow_weights
         RAFT state-dict file for ``flow="raft"``.
     segmentation_weights
@@ -187,8 +194,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     perception = perception_stages(sequence, segmentation, flow, detections=detections,
                                    flow_weights=flow_weights,
                                    segmentation_weights=segmentation_weights,
-                                   detector=detector if config.lidar_objects.use_detections
-                                   else "none", detector_weights=detector_weights)
+                                   detector=detector, detector_weights=detector_weights,
+                                   fuse_detections=config.lidar_objects.use_detections)
     if (perception.segmentation is not None and config.visual_objects.enabled
             and not config.tracking.dynamic_class_ids):
         # eq. 3: object classes track their clusters, never the camera
@@ -214,7 +221,7 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     with RateBar(len(indices), f"seq {name}" if name else "run", enabled=progress) as bar:
         last = time.perf_counter()
         # the scans serve keypoint depth and the registration of object scans (e_reg)
-        lidar = config.lidar.use_depth or (perception.detector is not None
+        lidar = config.lidar.use_depth or (perception.fuse_detections
                                            and config.lidar_objects.use_registration)
         for item in _prefetched(sequence, indices, labels, perception, lidar=lidar):
             out = slam.track(item.frame, item.class_ids, instances=item.instance_ids,
@@ -252,7 +259,7 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
                  if perception.segmentation is not None else None),
         segmentation=perception.segmentation_name,
         flow=perception.flow_name,
-        detector=perception.detector_name,
+        detector=perception.detector_name if perception.fuse_detections else "none",
     )
 
 

@@ -1,18 +1,22 @@
-"""The perception stages of a run (:func:`twistslam.run`): which segmentation and flow source
-a sequence gets, from a name or a user's callable.
+"""The perception stages of a run (:func:`twistslam.run`): which segmentation, flow and 3D
+detection source a sequence gets, from a name or a user's callable.
 
 ``segmentation``: ``"auto"`` (the sequence's panoptic files when it has them, else masks from
-its 3D detections and LiDAR scans when it has both, else none), ``"files"``, ``"boxes"``,
-``"torch"`` (a Mask R-CNN and a semantic network; needs ``segmentation_weights``),
-``"none"`` / ``None``, or any callable ``frame -> Panoptic | (class_id, instance_id)``.
+3D boxes and the LiDAR scans when it has scans and boxes come from somewhere, else none),
+``"files"``, ``"boxes"``, ``"torch"`` (a Mask R-CNN and a semantic network; needs
+``segmentation_weights``), ``"none"`` / ``None``, or any callable ``frame -> Panoptic |
+(class_id, instance_id)``. The boxes of ``"boxes"`` are the configured detector's of the same
+frame (named ``"boxes:<detector>"``, e.g. ``"boxes:classical"``: the whole system from raw
+stereo + LiDAR); with ``detector="none"`` the precomputed detection files
+(``"boxes:files"``).
 ``flow``: ``"auto"`` (files when present, else OpenCV DIS), ``"files"``, ``"dis"``, ``"raft"``
 (needs ``flow_weights``), ``"none"`` / ``None``, or any callable ``(previous, current) ->
 (H, W, 2)``. Flow only serves object tracking: without segmentation no flow is computed.
-``detector``: the 3D detections of the LiDAR fusion (``config.lidar_objects``): ``"auto"`` (the
-sequence's detection files, else the classical LiDAR detector when the sequence has scans,
-else none), ``"files"``, ``"classical"``, ``"3dssd"`` (needs ``detector_weights``), ``"none"``
-/ ``None``, or any callable ``frame -> Detections3D``. Like flow, it only serves object
-tracking.
+``detector``: the 3D detections of the LiDAR fusion (``config.lidar_objects``) and of the
+masks from boxes: ``"auto"`` (the sequence's detection files, else the classical LiDAR
+detector when the sequence has scans, else none), ``"files"``, ``"classical"``, ``"3dssd"``
+(needs ``detector_weights``), ``"none"`` / ``None``, or any callable ``frame ->
+Detections3D``. Like flow, it only serves object tracking.
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ import numpy as np
 from .detection import Detections3D
 from .flow import FLOW_KINDS, flow_source
 from .panoptic import Panoptic
+from .panoptic_from_boxes import DETECTOR_MASK_MIN_SCORE, BoxMaskConfig, PanopticFromDetections
 from .panoptic_source import check_panoptic, panoptic_source
 from .stage import check_flow
 
@@ -57,8 +62,12 @@ def _has_lidar(sequence) -> bool:
 
 @dataclass
 class Perception:
-    """The stages a run uses. ``segmentation`` / ``flow`` are ``None`` when off; ``needs_lidar``:
-    the segmentation reads the frames' scans (masks from boxes)."""
+    """The stages a run uses. ``segmentation`` / ``flow`` / ``detector`` are ``None`` when off.
+    ``needs_lidar``: a stage reads the frames' scans (masks from boxes, a LiDAR detector).
+    ``masks_from_detections``: the segmentation is ``(frame, detections) -> Panoptic``, fed
+    the detector's boxes of the same frame (:meth:`detect` runs first, once per frame).
+    ``fuse_detections``: the detections also go to the LiDAR fusion (``False``: they only
+    make the masks, ``config.lidar_objects.use_detections`` off)."""
 
     segmentation: Callable[..., Any] | None = None
     flow: Callable[..., np.ndarray] | None = None
@@ -67,14 +76,23 @@ class Perception:
     needs_lidar: bool = False
     detector: Callable[..., Detections3D] | None = None
     detector_name: str = "none"
+    masks_from_detections: bool = False
+    fuse_detections: bool = True
 
-    def panoptic(self, frame) -> Panoptic | None:
+    def panoptic(self, frame, detections: Detections3D | None = None) -> Panoptic | None:
         """The frame's labels; ``None`` when off, or when a file source has no file for this
         frame (the frame is tracked without masks: clusters keep their tracks from their
-        matched points, camera tracking uses every keypoint)."""
+        matched points, camera tracking uses every keypoint). ``detections``: this frame's
+        :meth:`detect`, required when the masks come from the detector."""
         if self.segmentation is None:
             return None
         shape = np.asarray(frame.image_left).shape[:2]
+        if self.masks_from_detections:
+            if detections is None:
+                raise ValueError(f"segmentation '{self.segmentation_name}': frame {frame.index} "
+                                 "needs its detections (Perception.detect) for its masks")
+            return check_panoptic(self.segmentation(frame, detections), shape,
+                                  self.segmentation_name)
         try:
             result = self.segmentation(frame)
         except FileNotFoundError:
@@ -100,37 +118,46 @@ class Perception:
         return np.ascontiguousarray(check_flow(self.flow(previous, current), shape, self.flow_name))
 
 
-def _segmentation(kind, sequence, detections, weights=None) -> tuple[Callable | None, str, bool]:
-    if kind is None or kind == "none":
-        return None, "none", False
-    if callable(kind):
-        return kind, getattr(kind, "__name__", type(kind).__name__), False
+def _segmentation_kind(kind, sequence) -> Any:
+    """``kind`` checked, ``"auto"`` resolved: ``"files"`` when the sequence has panoptic
+    files, else ``"boxes"`` when it has scans (the boxes' source is chosen with the detector,
+    :func:`_box_masks`), else ``"none"``; ``None`` is ``"none"``."""
+    if kind is None or callable(kind):
+        return "none" if kind is None else kind
     if kind not in SEGMENTATION_KINDS:
         raise ValueError(f"segmentation '{kind}': expected one of {', '.join(SEGMENTATION_KINDS)} "
                          "or a callable frame -> Panoptic")
-    if kind == "auto":
-        try:
-            return panoptic_source("files", sequence), "files", False
-        except FileNotFoundError:
-            pass
-        if detections is None:
-            detections = find_detections(sequence)
-        if detections is None or not _has_lidar(sequence):
-            return None, "none", False
-        kind = "boxes"
-    if kind == "files":
-        return panoptic_source("files", sequence), "files", False
-    if kind == "torch":
-        return panoptic_source("torch", sequence, weights=weights), "torch", False
+    if kind != "auto":
+        return kind
+    try:
+        panoptic_source("files", sequence)
+        return "files"
+    except FileNotFoundError:
+        return "boxes" if _has_lidar(sequence) else "none"
+
+
+def _box_masks(sequence, detections, detect, detect_name: str, auto: bool
+               ) -> tuple[Callable | None, str, bool]:
+    """The masks-from-boxes stage, its name ``"boxes:<source>"`` and whether it takes the
+    frame's detections: the run's detector when there is one, else the precomputed
+    ``detections`` (or the sequence's own files); ``(None, "none", False)`` for ``"auto"``
+    without either."""
+    if detect is not None:
+        config = BoxMaskConfig(min_score=DETECTOR_MASK_MIN_SCORE.get(detect_name))
+        return PanopticFromDetections(config), f"boxes:{detect_name}", True
     from ..objects.detections_input import load_detections
 
     if detections is None:
         detections = find_detections(sequence)
     if detections is None:
-        raise FileNotFoundError(f"segmentation 'boxes': {sequence} has no detections/<name>/"
-                                f"{getattr(sequence, 'seq', '')}.txt; pass detections=")
+        if auto:
+            return None, "none", False
+        raise FileNotFoundError(
+            f"segmentation 'boxes' needs 3D boxes: no detector is configured (detector 'none') "
+            f"and {sequence} has no detections/<name>/{getattr(sequence, 'seq', '')}.txt; pass "
+            "detector='classical' (the LiDAR detector, no weights) or detections=FILE")
     table = load_detections(detections, str(getattr(sequence, "seq", "")), len(sequence))
-    return panoptic_source("boxes", sequence, boxes=table), "boxes", True
+    return panoptic_source("boxes", sequence, boxes=table), "boxes:files", False
 
 
 class TableDetections:
@@ -144,9 +171,8 @@ class TableDetections:
         return Detections3D.from_table(self.table.in_frame(int(frame.index)))
 
 
-def _detector(kind, sequence, detections, segmentation_name: str,
-              weights=None) -> tuple[Callable | None, str]:
-    if kind is None or kind == "none" or segmentation_name == "none":
+def _detector(kind, sequence, detections, weights=None) -> tuple[Callable | None, str]:
+    if kind is None or kind == "none":
         return None, "none"
     if callable(kind):
         return kind, getattr(kind, "__name__", type(kind).__name__)
@@ -172,10 +198,17 @@ def _detector(kind, sequence, detections, segmentation_name: str,
 def perception_stages(sequence, segmentation: Any = "auto", flow: Any = "auto", *,
                       detections: Any = None, flow_weights: str | Path | None = None,
                       segmentation_weights: dict | None = None,
-                      detector: Any = "none", detector_weights: str | Path | None = None) -> Perception:
-    """The segmentation and flow stages for ``sequence`` (see the module docstring).
-    ``segmentation_weights``: the files of ``segmentation="torch"``, ``{"maskrcnn": FILE,
-    "semantic": FILE}`` (see :func:`~.panoptic_source.panoptic_source`).
+                      detector: Any = "none", detector_weights: str | Path | None = None,
+                      fuse_detections: bool = True) -> Perception:
+    """The segmentation, flow and detection stages for ``sequence`` (see the module
+    docstring). ``segmentation_weights``: the files of ``segmentation="torch"``, ``{"maskrcnn":
+    FILE, "semantic": FILE}`` (see :func:`~.panoptic_source.panoptic_source`).
+    ``fuse_detections``: the detections serve the LiDAR fusion; when ``False`` the detector
+    only runs when the masks come from it.
+
+    Masks from boxes (``"boxes"``, or ``"auto"`` without panoptic files) come from the
+    configured detector's boxes of each frame (the detector runs once per frame, for the
+    masks and the fusion); with ``detector="none"`` from the precomputed ``detections``.
 
     Raises
     ------
@@ -183,20 +216,38 @@ def perception_stages(sequence, segmentation: Any = "auto", flow: Any = "auto", 
         An unknown source name; "torch" without its weights or with a file that is not that
         network's state dict.
     FileNotFoundError
-        "files" without files, "boxes" without detections, a weight file of "raft" or
-        "torch" that does not exist.
+        "files" without files, "boxes" with neither a detector nor detections, a weight file
+        of "raft" or "torch" that does not exist.
     """
-    seg, seg_name, needs_lidar = _segmentation(segmentation, sequence, detections,
-                                               segmentation_weights)
-    detect, detect_name = _detector(detector, sequence, detections, seg_name, detector_weights)
+    seg_kind = _segmentation_kind(segmentation, sequence)
+    detect, detect_name = None, "none"
+    if seg_kind != "none" and (fuse_detections or seg_kind == "boxes"):
+        detect, detect_name = _detector(detector, sequence, detections, detector_weights)
+    from_detections = False
+    if callable(seg_kind):
+        seg, seg_name = seg_kind, getattr(seg_kind, "__name__", type(seg_kind).__name__)
+    elif seg_kind == "boxes":
+        seg, seg_name, from_detections = _box_masks(sequence, detections, detect, detect_name,
+                                                    auto=segmentation == "auto")
+    elif seg_kind in ("files", "torch"):
+        seg, seg_name = panoptic_source(seg_kind, sequence, weights=segmentation_weights), seg_kind
+    else:
+        seg, seg_name = None, "none"
+    if seg is None or not (fuse_detections or from_detections):
+        detect, detect_name = None, "none"  # the detections only serve object tracking
+    # the classical detector, 3DSSD and a user's callable read the scans; files do not
+    needs_lidar = seg_name.startswith("boxes:") or (detect is not None and detect_name != "files")
+    stages = dict(segmentation_name=seg_name, needs_lidar=needs_lidar, detector=detect,
+                  detector_name=detect_name, masks_from_detections=from_detections,
+                  fuse_detections=fuse_detections and detect is not None)
     if seg is None or flow is None or flow == "none":
-        return Perception(seg, None, seg_name, "none", needs_lidar, detect, detect_name)
+        return Perception(seg, None, flow_name="none", **stages)
     if callable(flow):
-        return Perception(seg, flow, seg_name, getattr(flow, "__name__", type(flow).__name__),
-                          needs_lidar, detect, detect_name)
+        return Perception(seg, flow, flow_name=getattr(flow, "__name__", type(flow).__name__),
+                          **stages)
     if flow not in FLOW_KINDS:
         raise ValueError(f"flow '{flow}': expected one of {', '.join(FLOW_KINDS)}, 'none' "
                          "or a callable (previous, current) -> (H, W, 2)")
     stage = flow_source(flow, sequence, weights=flow_weights)
     name = type(stage).__name__.replace("Flow", "").lower() or flow
-    return Perception(seg, stage, seg_name, name, needs_lidar, detect, detect_name)
+    return Perception(seg, stage, flow_name=name or flow, **stages)
