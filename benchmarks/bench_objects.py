@@ -17,8 +17,9 @@ on the simulator's sequence, ``.cache/sim/SCENARIO-seedS-nF``, generated when mi
 * ``det`` / ``det-reg``: LiDAR fusion with the simulator's oracle 3D detections
   (``detector="files"``): canonical poses, sizes, e_det, then also GICP of the object scans
   (e_reg); ``classical``: the same with the core's classical LiDAR detector instead of the
-  oracle (no precomputed files); every other row runs with ``detector="none"`` (the camera
-  alone);
+  oracle (no precomputed files); ``classical-masks``: the same with the instance masks from
+  those boxes too (no panoptic files: the system from raw stereo + LiDAR); every other row
+  runs with ``detector="none"`` (the camera alone);
 * ``raft``: RAFT flow (``raft_small``) from the state-dict file ``--raft-weights FILE`` (or
   ``$TWISTSLAM_RAFT_WEIGHTS``) over the first ``--raft-frames`` frames only (default 10: RAFT
   is slow on a CPU), so its object metrics still count every car of the whole sequence and
@@ -108,6 +109,8 @@ ROWS = {r.name: r for r in [
     Row("det-reg", detector="files"),
     # the whole system from raw stereo + LiDAR: the classical LiDAR detector of the core
     Row("classical", detector="classical"),
+    # ... and its masks from the classical boxes too (no panoptic files: raw stereo + LiDAR)
+    Row("classical-masks", segmentation="boxes", detector="classical"),
 ]}
 #: environment variable naming the RAFT state-dict file when --raft-weights is not given
 RAFT_WEIGHTS_ENV = "TWISTSLAM_RAFT_WEIGHTS"

@@ -210,9 +210,10 @@ def _add_run(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--segmentation", default="auto",
                    choices=["auto", "files", "boxes", "torch", "none"],
                    help="panoptic segmentation source: files (the sequence's panoptic PNGs), "
-                   "boxes (masks from 3D detections), torch (Mask R-CNN + semantic network, "
-                   "needs --maskrcnn-weights), none; auto: files when the sequence "
-                   "has them, else boxes (default: auto)")
+                   "boxes (masks from the 3D boxes of --detector, or of the detection files "
+                   "with --detector none), torch (Mask R-CNN + semantic network, needs "
+                   "--maskrcnn-weights), none; auto: files when the sequence has them, else "
+                   "boxes when it has LiDAR scans (default: auto)")
     p.add_argument("--maskrcnn-weights", metavar="FILE", type=Path, default=None,
                    help="--segmentation torch: state dict of a torchvision-layout "
                    "maskrcnn_resnet50_fpn (COCO classes); nothing is downloaded")

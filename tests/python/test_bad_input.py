@@ -385,7 +385,7 @@ def test_two_runs_of_the_demo_slam_are_byte_identical(sim_root, tmp_path):
     assert results[0].camera_poses.tobytes() == results[1].camera_poses.tobytes()
 
 
-def test_real_sequence_without_labels_or_detections_warns_nothing(tmp_path, capsys):
+def test_real_sequence_without_labels_or_detections_runs_and_evaluates_the_camera(tmp_path, capsys):
     real = require_real_data("kitti_tracking_lidar", "training")
     base = tmp_path / "kitti" / "training"
     for folder in ("image_02", "image_03", "velodyne"):
@@ -396,6 +396,10 @@ def test_real_sequence_without_labels_or_detections_warns_nothing(tmp_path, caps
                                         tmp_path / "res", "--no-progress", "--set",
                                         "run.max_frames=6"], capsys)
     assert code == 0 and err == [] and warned == []
+    # the run's objects came from the classical LiDAR detector (no detection files); without
+    # labels only the camera is evaluated, and one warning says why the objects are not
+    assert (tmp_path / "res" / "tracking" / "0001.txt").is_file()
     code, err, out, warned = call_warned(["eval", base.parent, tmp_path / "res", "--seq", "0001"],
                                          capsys)
-    assert code == 0 and err == [] and warned == [] and "Camera" in out
+    assert code == 0 and err == [] and "Camera" in out
+    assert len(warned) == 1 and "label" in warned[0] and "objects are not evaluated" in warned[0]

@@ -181,7 +181,14 @@ def evaluate_sequence(
         out.trajectories.camera_gt = gt_T_w_c
         out.trajectories.camera_est = results.camera_poses
 
-    if results.tracking is not None:
+    if results.tracking is not None and dataset.gt_objects is None:
+        # a run on a sequence without labels (its objects came from a detector): the camera
+        # is still evaluated, the objects cannot be
+        try:
+            ground_truth(dataset, name)
+        except FileNotFoundError as exc:
+            warnings.warn(f"{exc}: the objects are not evaluated", stacklevel=2)
+    elif results.tracking is not None:
         gt = ground_truth(dataset, name)
         if gt_T_w_c is None:
             est_T_w_c, out.world_frame = None, "camera frame"
