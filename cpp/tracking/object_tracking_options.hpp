@@ -17,11 +17,12 @@ struct ObjectTrackingOptions {
   std::vector<int> planar_class_ids{26, 27, 28, 29, 30, 31, 32, 33};
   int road_class_id = 7;            // the road cluster gives the planar link's normal
   double road_max_depth_m = 25;     // road keypoints farther than this do not join the plane fit
-  // LiDAR returns on road pixels join the road plane fit (tracking/road_lidar_points.hpp)
+  // LiDAR returns on road pixels join the road plane fit (tracking/road_lidar_points.hpp);
+  // off: the stereo road keypoints give the plane as well (figures in config_visual_objects.py)
   bool road_lidar_points = false;
   double road_lidar_max_depth_m = 25;  // m along the optical axis
   int road_lidar_border_px = 3;        // px: the whole (2 b + 1)^2 window must be road
-  int road_lidar_max_points = 300;     // returns per keyframe
+  int road_lidar_max_points = 300;     // returns per keyframe (the plane's reservoir holds 5000)
   double flow_radius_px = 4;        // search window around the flow-predicted position
   double projection_radius_px = 12; // ... around the motion-model projection (no flow)
   double refine_radius_px = 3;      // ... of the second pass, around the estimated pose
