@@ -184,7 +184,9 @@ was estimated that frame, ...) and ``points_o`` (M, 3) its points in the object 
                              "num_fits"_a = r.num_fits(), "last_inliers"_a = r.last_inliers());
            },
            R"doc(The road plane that gives the planar link's normal, fitted (RANSAC + SVD) to the
-stereo keypoints labelled ``visual_objects.road_class_id`` of every keyframe.
+stereo keypoints labelled ``visual_objects.road_class_id`` of every keyframe, and with
+``visual_objects.road_lidar_points`` the scan's returns on road pixels away from the mask
+boundary.
 
 Returns
 -------

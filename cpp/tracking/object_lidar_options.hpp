@@ -12,7 +12,7 @@ struct ObjectLidarOptions {
   double detection_max_distance_m = 2.0;   // box to cluster (paper: 2 m)
   double detection_min_score = -1e9;       // detections below this are ignored
   bool canonical_pose = true;              // the first associated box sets the object frame
-  double heading_from_motion_m = 3.0;      // travelled this far, a box frame facing backwards turns
+  double heading_from_motion_m = 1.5;      // travelled this far, a box frame facing backwards turns
   // the canonical frame re-anchored to the mean offset of all its boxes (objects/box_offset.hpp)
   bool refine_canonical = true;
   double refine_min_range_m = 5.0;         // box weight 1 / max(range, this)^2

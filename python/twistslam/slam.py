@@ -209,9 +209,12 @@ class Slam:
                                  f"{(height, width, 2)}")
         system = self._system_for(frame, labels)
         scan = None
-        # the scan serves keypoint depth, and the registration of object scans (e_reg)
+        # the scan serves keypoint depth, the registration of object scans (e_reg) and the
+        # road returns of the road plane fit
         registration = detections is not None and self.config.lidar_objects.use_registration
-        if (self.config.lidar.use_depth or registration) and frame.points_c is not None:
+        wanted = (self.config.lidar.use_depth or registration
+                  or self.config.visual_objects.road_lidar_points)
+        if wanted and frame.points_c is not None:
             scan = np.asarray(frame.points_c)[:, :3]
 
         boxes = scores = class_ids = None
