@@ -31,8 +31,14 @@ void ObjectTracker::make_canonical(int c, const Mat4& T_w_box) {
 void ObjectTracker::check_heading_from_motion(int c) {
   objects::ObjectTrack& track = tracks_[c];
   const objects::TrackFrame* start = track.at(track.canonical_frame);
-  if (!start || !(lidar_options_.heading_from_motion_m > 0)) return;
-  const Vec3 moved = track.last().T_w_o.topRightCorner<3, 1>() - start->T_w_o.topRightCorner<3, 1>();
+  if (!start || !start->has_detection() || !track.last().has_detection() ||
+      !(lidar_options_.heading_from_motion_m > 0))
+    return;
+  // the motion of the box centres, not of the tracked poses: boxes do not drift, while a far
+  // cluster's visual twist can run the wrong way for frames (an oncoming car at 50 m turned a
+  // correct oracle box around, urban seed 1)
+  const Vec3 moved = track.last().T_w_o_detected.topRightCorner<3, 1>() -
+                     start->T_w_o_detected.topRightCorner<3, 1>();
   if (moved.norm() < lidar_options_.heading_from_motion_m) return;
   track.heading_from_motion = true;
   if (track.last().T_w_o.block<3, 1>(0, 0).dot(moved) >= 0) return;
@@ -57,7 +63,10 @@ void ObjectTracker::refine_canonical(int c) {
   }
   if (samples.size() < 2) return;
   const objects::BoxOffset offset = objects::mean_box_offset(samples);
-  if (!offset.valid) return;
+  // a frame refined by boxes that disagree among themselves would chase a track whose poses
+  // drift (a far cluster's wrong visual twist): most boxes must agree on the offset
+  if (!offset.valid || offset.inliers < lidar_options_.refine_min_agreement * static_cast<double>(samples.size()))
+    return;
   const double shift_m = offset.T_o_box.topRightCorner<3, 1>().norm();
   const double turn_rad = geometry::so3_log(offset.T_o_box.topLeftCorner<3, 3>()).norm();
   if (shift_m < lidar_options_.refine_min_shift_m && turn_rad < lidar_options_.refine_min_turn_rad) return;

@@ -18,6 +18,7 @@ struct ObjectLidarOptions {
   double refine_min_range_m = 5.0;         // box weight 1 / max(range, this)^2
   double refine_min_shift_m = 0.01;        // smaller offsets leave the frame as it is
   double refine_min_turn_rad = 0.002;      // ... and smaller turns
+  double refine_min_agreement = 0.6;       // fraction of the boxes within 1 m / 15 deg of the mean
   // e_det and the detection pose prior in the object window (optim/visual_object_window.hpp)
   bool use_detection_twist = true;
   double det_sigma_translation = 0.2;      // m/frame
@@ -50,6 +51,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("refine_min_range_m", o.refine_min_range_m, 0.01, 1000.0);
   visit("refine_min_shift_m", o.refine_min_shift_m, 0.0, 100.0);
   visit("refine_min_turn_rad", o.refine_min_turn_rad, 0.0, 10.0);
+  visit("refine_min_agreement", o.refine_min_agreement, 0.0, 1.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);
   visit("det_sigma_translation", o.det_sigma_translation, 1e-6, 100.0);
   visit("det_sigma_rotation", o.det_sigma_rotation, 1e-6, 10.0);
