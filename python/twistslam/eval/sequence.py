@@ -181,9 +181,10 @@ def evaluate_sequence(
         out.trajectories.camera_gt = gt_T_w_c
         out.trajectories.camera_est = results.camera_poses
 
-    if results.tracking is not None and dataset.gt_objects is None:
+    if results.tracking is not None and dataset.gt_objects is None and out.camera is not None:
         # a run on a sequence without labels (its objects came from a detector): the camera
-        # is still evaluated, the objects cannot be
+        # is still evaluated, the objects cannot be (with nothing else to evaluate, the
+        # missing labels stay an error, below)
         try:
             ground_truth(dataset, name)
         except FileNotFoundError as exc:
