@@ -51,11 +51,10 @@ RoadLidarPoints select_road_lidar_points(const Points3& points_c,
       ++out.num_non_finite;
       continue;
     }
-    const Vec3 X_left = X + camera.t_left;  // stereo_camera.hpp: X_left = X_c + t_left
-    const double z = X_left.z();
+    const double z = X.z() + camera.t_left.z();  // depth along the left optical axis
     if (!(z > 0) || z > s.max_depth_m) continue;
-    const double u = camera.fx * X_left.x() / z + camera.cx;
-    const double v = camera.fy * X_left.y() / z + camera.cy;
+    const Vec2 uv = camera.project(X);
+    const double u = uv.x(), v = uv.y();
     if (!(u >= u_lo && u < u_hi && v >= v_lo && v < v_hi)) continue;
     const int pu = static_cast<int>(std::floor(u + 0.5)), pv = static_cast<int>(std::floor(v + 0.5));
     if (labels.at<int>(pv, pu) != s.road_class_id) continue;

@@ -175,8 +175,7 @@ TEST_F(DetectionFusion, LaterBoxesReanchorAFirstBoxsError) {
   for (const bool refine : {true, false}) {
     tracking::ObjectLidarOptions lidar;
     lidar.refine_canonical = refine;
-    auto tracker = tracking::ObjectTracker(kCamera, {}, {1.0f, 1.2f, 1.44f, 1.728f},
-                                           tracking::LevelWeights({1.0f, 1.44f, 2.07f, 2.99f}), lidar);
+    auto tracker = make_tracker({}, lidar);
     std::mt19937 box_rng(7);
     std::vector<tracking::ObjectTrackingReport> reports;
     run_with_boxes(tracker, car, background, 25, boxes, box_rng, &reports);

@@ -152,9 +152,10 @@ struct SceneFrame {
   }
 };
 
-tracking::ObjectTracker make_tracker(const tracking::ObjectTrackingOptions& options = {}) {
+tracking::ObjectTracker make_tracker(const tracking::ObjectTrackingOptions& options = {},
+                                     const tracking::ObjectLidarOptions& lidar = {}) {
   return tracking::ObjectTracker(kCamera, options, {1.0f, 1.2f, 1.44f, 1.728f},
-                                 tracking::LevelWeights({1.0f, 1.44f, 2.07f, 2.99f}));
+                                 tracking::LevelWeights({1.0f, 1.44f, 2.07f, 2.99f}), lidar);
 }
 
 // Per-frame instance ids that change every frame (never the previous frame's id).
