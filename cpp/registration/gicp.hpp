@@ -17,6 +17,7 @@ namespace twistslam::registration {
 struct GicpScan {
   std::vector<Vec3> points;
   std::vector<Mat3> covariances;  // empty when the scan has too few points
+  std::vector<Vec3> normals;      // covariances[i] = plane_covariance(normals[i]); same size
   KdTree tree;
   int num_neighbors = 0;
   int num_dropped_non_finite = 0;  // NaN / Inf rows left out of `points`
@@ -62,6 +63,12 @@ struct GicpOptions {
   // Fewer correspondences than this leave the estimate unconstrained: stop, not converged
   // (6 unknowns; 10 leaves a margin over a minimal set).
   int min_correspondences = 10;
+  // A step that raises the mean cost is retried at half length at most this many times in a
+  // row; then the last accepted estimate is returned as converged. 1: on the bench's pairs the
+  // errors equal those of unlimited halving (within 0.02 cm / 0.001 deg) with about half the
+  // iterations (median 13 -> 7 on real consecutive pairs): a step still rejected at half length
+  // was rejected down to the thresholds (the re-associated cost has a kink there).
+  int max_step_halvings = 1;
 };
 
 // Throws std::invalid_argument naming the first bad field.

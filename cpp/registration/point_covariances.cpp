@@ -4,14 +4,13 @@
 
 namespace twistslam::registration {
 
-std::vector<Mat3> plane_covariances(const std::vector<Vec3>& points, const KdTree& tree,
-                                    int num_neighbors, double plane_epsilon) {
+std::vector<Vec3> plane_normals(const std::vector<Vec3>& points, const KdTree& tree,
+                                int num_neighbors) {
   if (num_neighbors < 3 || tree.size() < num_neighbors)
     throw std::invalid_argument("plane_covariances: need num_neighbors >= 3 and at least "
                                 "num_neighbors points");
-  std::vector<Mat3> covariances(points.size());
+  std::vector<Vec3> normals(points.size());
   std::vector<Neighbor> neighbors;
-  const Vec3 plane_eigenvalues(plane_epsilon, 1.0, 1.0);  // ascending, as the solver returns
   for (const int i : tree.leaf_order()) {
     tree.knn(points[i], num_neighbors, &neighbors);
     Vec3 mean = Vec3::Zero();
@@ -25,10 +24,18 @@ std::vector<Mat3> plane_covariances(const std::vector<Vec3>& points, const KdTre
     // Closed-form 3x3 eigen decomposition: several times faster than the iterative one and
     // accurate enough for a direction (the eigenvalues are replaced anyway).
     Eigen::SelfAdjointEigenSolver<Mat3> eig;
-    eig.computeDirect(scatter);
-    const Mat3& V = eig.eigenvectors();
-    covariances[i] = V * plane_eigenvalues.asDiagonal() * V.transpose();
+    eig.computeDirect(scatter, Eigen::ComputeEigenvectors);
+    normals[i] = eig.eigenvectors().col(0);  // ascending eigenvalues: the normal first
   }
+  return normals;
+}
+
+std::vector<Mat3> plane_covariances(const std::vector<Vec3>& points, const KdTree& tree,
+                                    int num_neighbors, double plane_epsilon) {
+  const std::vector<Vec3> normals = plane_normals(points, tree, num_neighbors);
+  std::vector<Mat3> covariances(normals.size());
+  for (std::size_t i = 0; i < normals.size(); ++i)
+    covariances[i] = plane_covariance(normals[i], plane_epsilon);
   return covariances;
 }
 

@@ -13,9 +13,21 @@ namespace twistslam::registration {
 // value, also used by small_gicp, Open3D and PCL: the same cost for every method in the bench.
 inline constexpr double kPlaneEpsilon = 1e-3;
 
-// Covariance of every point from its num_neighbors nearest (itself included) in `tree`, which
-// was built from `points`. Throws std::invalid_argument unless tree.size() >= num_neighbors
-// >= 3. Neighbours that all coincide give an arbitrary (but finite) plane.
+// Unit normal of every point: the smallest-eigenvalue axis of the covariance of its
+// num_neighbors nearest (itself included) in `tree`, which was built from `points`. The sign
+// is arbitrary (a plane covariance does not see it). Throws std::invalid_argument unless
+// tree.size() >= num_neighbors >= 3. Neighbours that all coincide give an arbitrary (but unit)
+// normal.
+std::vector<Vec3> plane_normals(const std::vector<Vec3>& points, const KdTree& tree,
+                                int num_neighbors);
+
+// The plane covariance of a unit normal n: V diag(eps, 1, 1) V^T = I - (1 - eps) n n^T (V
+// orthonormal with n its first column), so a normal is all GICP needs to store per point.
+inline Mat3 plane_covariance(const Vec3& normal, double plane_epsilon = kPlaneEpsilon) {
+  return Mat3::Identity() - (1.0 - plane_epsilon) * normal * normal.transpose();
+}
+
+// Covariance of every point (plane_covariance of plane_normals); same arguments and errors.
 std::vector<Mat3> plane_covariances(const std::vector<Vec3>& points, const KdTree& tree,
                                     int num_neighbors, double plane_epsilon = kPlaneEpsilon);
 
