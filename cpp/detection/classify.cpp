@@ -37,6 +37,18 @@ Detection make_box(const ClusterShape& s, const BevRectangle& r, int length_axis
   return d;
 }
 
+// Whether the returns of the side along `axis` lie closer together than the clustering's gap
+// even at its far end: consecutive azimuth steps hit a side seen at angle theta from the
+// line of sight at range r about r * step / sin(theta) apart, and a wider spacing may have
+// cut the side's far end off into another cluster.
+bool side_densely_seen(const BevRectangle& f, int axis, const DetectorOptions& o) {
+  const BevPoint centre = f.centre(), a = f.axis_direction(axis);
+  const double range = std::hypot(centre.x, centre.z) + 0.5 * f.extent(axis);  // the far end
+  const double cos_view = std::abs(a.x * centre.x + a.z * centre.z) / std::hypot(centre.x, centre.z);
+  const double sin_view = std::sqrt(std::max(0.0, 1.0 - cos_view * cos_view));
+  return range * o.sensor_azimuth_step_deg * M_PI / 180.0 < o.cluster_gap_m * sin_view;
+}
+
 // the car's length axis and its extended footprint, or nullopt if the footprint is no car's
 std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o) {
   const BevRectangle& f = s.footprint;
@@ -60,10 +72,19 @@ std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o)
   if (rear_or_front && short_side < o.single_face_m && long_side <= o.cyclist_max_length_m &&
       s.top_m >= o.cyclist_min_height_m && s.upper_extent_m < o.cyclist_max_upper_extent_m)
     return std::nullopt;  // a cyclist seen from the side (see classify)
+  // an L (two faces, the length side not a rear seen edge-on) at least car_min_length_m long
+  // shows the whole length: only the far end, rounded off out of the sensor's sight, is
+  // missing. Any other view gives a lower bound: the prior's length behind the visible face.
+  const double seen_length = f.extent(length_axis);
+  const bool length_seen = !rear_or_front && short_side >= o.single_face_m &&
+                           seen_length >= o.car_min_length_m &&
+                           side_densely_seen(f, length_axis, o);
   BevRectangle box = f;
-  box.extend_away_from_sensor(length_axis, o.car_length_m);
+  box.extend_away_from_sensor(length_axis, length_seen ? seen_length + o.car_hidden_end_m
+                                                       : o.car_length_m);
   box.extend_away_from_sensor(1 - length_axis, o.car_width_m);
   Detection d = make_box(s, box, length_axis, s.top_m, ObjectClass::kCar);
+  d.length_seen = length_seen;
   const double seen = std::min(1.0, f.extent(0) * f.extent(1) / (d.length * d.width));
   const double fit = std::exp(-f.mean_edge_distance / o.score_edge_distance_m);
   d.score = fit * (kUnseenAreaWeight + (1.0 - kUnseenAreaWeight) * seen);

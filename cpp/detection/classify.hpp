@@ -22,6 +22,9 @@ struct Detection {
   double score = 0;    // (0, 1]: point count x fit quality x share of the box seen
   ObjectClass cls = ObjectClass::kCar;
   int num_points = 0;  // obstacle returns of the cluster
+  // cars: the length was measured (an L-shape of two faces), not the car_length_m prior;
+  // a box without it has its centre only as good as the prior (+- 0.2-0.3 m along the yaw)
+  bool length_seen = false;
 };
 
 struct ClusterShape {

@@ -32,6 +32,11 @@ bool inside_car(const Detection& car, const Vec3& p, double margin) {
   return std::abs(along) <= 0.5 * car.length + margin && std::abs(across) <= 0.5 * car.width + margin;
 }
 
+// Whether the box's centre lies within half_angle_deg of the camera axis.
+bool centre_in_view(const Detection& d, double half_angle_deg) {
+  return std::abs(std::atan2(d.centre.x(), d.centre.z())) <= half_angle_deg * M_PI / 180.0;
+}
+
 // Detections sorted by decreasing score, without those whose centre lies in a kept car box.
 std::vector<Detection> drop_car_pieces(std::vector<Detection> all) {
   std::stable_sort(all.begin(), all.end(),
@@ -116,6 +121,14 @@ DetectorResult detect(const Eigen::Ref<const Points3>& points_c, const DetectorO
     if (std::optional<Detection> d = classify(shape, options)) candidates.push_back(*d);
   }
   out.detections = drop_car_pieces(std::move(candidates));
+  if (options.front_only && selection_half_angle_deg(options) > options.fov_half_angle_deg) {
+    // the margin only serves to see border cars whole: boxes centred in it are not reported
+    // (after drop_car_pieces, so that a margin car still removes its pieces in the view)
+    std::vector<Detection>& d = out.detections;
+    d.erase(std::remove_if(d.begin(), d.end(), [&](const Detection& det) {
+              return !centre_in_view(det, options.fov_half_angle_deg);
+            }), d.end());
+  }
   out.timings.fit_ms = ms_since(t);
   return out;
 }

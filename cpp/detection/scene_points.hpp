@@ -15,11 +15,16 @@ struct ScenePoint {
 };
 
 struct SceneSelection {
-  std::vector<ScenePoint> points;  // finite, in range and (front_only) in the field of view
+  std::vector<ScenePoint> points;  // finite, in range and (front_only) in the widened field
   int num_non_finite = 0;          // input rows with a NaN / Inf coordinate (dropped)
 };
 
-// Rows of points_c (frame c) that pass the region-of-interest options.
+// deg, half the horizontal field the points are selected in with front_only: the field of
+// view plus its margin (at most 180).
+double selection_half_angle_deg(const DetectorOptions& options);
+
+// Rows of points_c (frame c) that pass the region-of-interest options (with front_only,
+// within selection_half_angle_deg of the camera axis).
 SceneSelection select_scene_points(const Eigen::Ref<const Points3>& points_c,
                                    const DetectorOptions& options);
 
