@@ -28,6 +28,7 @@ FieldTable gicp_fields(r::GicpOptions* o) {
       {"num_neighbors", set(&o->num_neighbors, 3, 1000)},
       {"huber_threshold", set(&o->huber_threshold, 1e-9, inf)},
       {"min_correspondences", set(&o->min_correspondences, 1, 1e9)},
+      {"max_step_halvings", set(&o->max_step_halvings, 0, 1000)},
       {"kernel", custom(
                      [o](const py::handle& v) {
                        const std::string name = py::str(v);

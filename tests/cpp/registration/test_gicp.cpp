@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "geometry/link_projection.hpp"
 #include "geometry/se3.hpp"
+#include "geometry/so3.hpp"
 #include "registration/gicp.hpp"
 #include "registration/synthetic_car.hpp"
 
@@ -145,4 +147,62 @@ TEST(Gicp, InvalidOptionsThrow) {
   o = GicpOptions();
   o.projector(0, 0) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(validate(o), std::invalid_argument);
+  o = GicpOptions();
+  o.max_step_halvings = -1;
+  EXPECT_THROW(validate(o), std::invalid_argument);
+}
+
+// The information (Hessian accumulated by 3x3 blocks in gicp.cpp) equals the dense
+// sum_i J_i^T W_i J_i, J_i = [-I, hat(q_i)], W_i = (C_t + R C_s R^T)^-1, at T_init (one
+// iteration: the only linearisation is at T_init).
+TEST(Gicp, InformationEqualsTheDenseGaussNewtonHessian) {
+  const Mat4 T_true = known_motion();
+  const GicpScan t = make_gicp_scan(test::car_scan(kCarCentre, 800, 0.01, 11), 20);
+  const GicpScan s = make_gicp_scan(
+      test::transformed(test::car_scan(kCarCentre, 800, 0.01, 12), geometry::se3_inverse(T_true)),
+      20);
+  GicpOptions o;
+  o.max_iterations = 1;
+  const Mat4 T_init = geometry::make_pose(Mat3::Identity(), Vec3(0.2, 0.0, 0.1)) * T_true;
+  const GicpResult r = gicp(s, t, T_init, o);
+  const Mat3 R = T_init.topLeftCorner<3, 3>();
+  Mat6 H = Mat6::Zero();
+  int inliers = 0;
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    const Vec3 q = R * s.points[i] + T_init.topRightCorner<3, 1>();
+    const Neighbor nn = t.tree.nearest(q, o.max_correspondence_distance_m *
+                                              o.max_correspondence_distance_m);
+    if (nn.index < 0) continue;
+    Eigen::Matrix<double, 3, 6> J;
+    J << -Mat3::Identity(), geometry::hat(q);
+    const Mat3 W = (t.covariances[nn.index] + R * s.covariances[i] * R.transpose()).inverse();
+    H += J.transpose() * W * J;
+    ++inliers;
+  }
+  EXPECT_EQ(r.num_inliers, inliers);
+  EXPECT_TRUE(r.information.isApprox(H, 1e-9)) << r.information - H;
+}
+
+// Limiting the halvings of a rejected step cuts the iterations spent retrying it (2 cm noise
+// on independent samplings, seeds where unlimited halving takes 15 iterations) and stays as
+// accurate: the centre within 1 cm of the truth for both, the rotation error (~0.4 deg here,
+// the noise's) within 0.05 deg of the unlimited one.
+TEST(Gicp, LimitingStepHalvingsKeepsTheAccuracy) {
+  const Mat4 T_true = known_motion();
+  const Points3 target = test::car_scan(kCarCentre, 1000, 0.02, 23);
+  const Points3 source =
+      test::transformed(test::car_scan(kCarCentre, 1000, 0.02, 24), geometry::se3_inverse(T_true));
+  GicpOptions unlimited;
+  unlimited.max_step_halvings = 1000;
+  const GicpResult a = gicp(source, target, Mat4::Identity(), unlimited);
+  const GicpResult b = gicp(source, target, Mat4::Identity());
+  ASSERT_TRUE(a.converged && b.converged);
+  EXPECT_LT(b.iterations, a.iterations);
+  const auto [dt_a, dr_a] = pose_error(T_true, a.T_target_source);
+  const auto [dt_b, dr_b] = pose_error(T_true, b.T_target_source);
+  EXPECT_LT(dt_a, 0.01);
+  EXPECT_LT(dt_b, 0.01);
+  EXPECT_NEAR(dr_b, dr_a, 0.05 * kDeg);
+  std::printf("iterations %d -> %d; centre %.2f / %.2f mm, rotation %.3f / %.3f deg\n",
+              a.iterations, b.iterations, 1e3 * dt_a, 1e3 * dt_b, dr_a / kDeg, dr_b / kDeg);
 }
