@@ -25,7 +25,7 @@ GicpScan make_gicp_scan(const Eigen::Ref<const Points3>& points, int num_neighbo
   }
   scan.tree = KdTree(scan.points);
   if (static_cast<int>(scan.points.size()) >= num_neighbors) {
-    scan.normals = plane_normals(scan.points, scan.tree, num_neighbors);
+    scan.normals = plane_normals(scan.points, scan.tree, num_neighbors, &scan.neighborhoods);
     scan.covariances.reserve(scan.normals.size());
     for (const Vec3& n : scan.normals) scan.covariances.push_back(plane_covariance(n));
   }
@@ -73,6 +73,33 @@ struct Linearization {
   int num_inliers = 0;
 };
 
+}  // namespace
+
+Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int hint) {
+  const Neighborhoods& nb = scan.neighborhoods;
+  if (nb.size == 0) return scan.tree.nearest(q, max_d2, hint);
+  for (int hop = 0; hop < kMaxNeighborhoodHops && hint >= 0; ++hop) {
+    const double rho2 = (scan.points[hint] - q).squaredNorm();
+    const int* candidates = nb.indices.data() + static_cast<std::size_t>(hint) * nb.size;
+    Neighbor best{hint, rho2};
+    for (int j = 0; j < nb.size; ++j) {
+      const double d2 = (scan.points[candidates[j]] - q).squaredNorm();
+      if (d2 < best.squared_distance_m2) best = Neighbor{candidates[j], d2};
+    }
+    // The nearest point is within rho of q, so within 2 rho of the hint: inside the hint's
+    // neighbourhood when 2 rho <= its radius.
+    if (4.0 * rho2 <= nb.radius2_m2[hint]) {
+      if (best.squared_distance_m2 >= max_d2) best.index = -1;
+      return best;
+    }
+    if (best.index == hint) break;
+    hint = best.index;  // closer to q: its neighbourhood may certify
+  }
+  return scan.tree.nearest(q, max_d2, hint);
+}
+
+namespace {
+
 // `neighbor_of` holds each source point's target neighbour of the previous iteration (-1 =
 // none) and is updated: it seeds the next search, which mostly ends right there.
 Linearization linearize(const GicpScan& source, const GicpScan& target, const Mat4& T,
@@ -90,7 +117,7 @@ Linearization linearize(const GicpScan& source, const GicpScan& target, const Ma
   const double one_minus_eps = 1.0 - kPlaneEpsilon;
   for (std::size_t i = 0; i < source.points.size(); ++i) {
     const Vec3 q = R * source.points[i] + t;
-    const Neighbor nn = target.tree.nearest(q, max_d2, (*neighbor_of)[i]);
+    const Neighbor nn = nearest_in_scan(target, q, max_d2, (*neighbor_of)[i]);
     (*neighbor_of)[i] = nn.index;
     if (nn.index < 0) continue;
     const Vec3 e = target.points[nn.index] - q;

@@ -9,6 +9,7 @@
 
 #include "geometry/types.hpp"
 #include "registration/kdtree.hpp"
+#include "registration/point_covariances.hpp"
 
 namespace twistslam::registration {
 
@@ -18,6 +19,7 @@ struct GicpScan {
   std::vector<Vec3> points;
   std::vector<Mat3> covariances;  // empty when the scan has too few points
   std::vector<Vec3> normals;      // covariances[i] = plane_covariance(normals[i]); same size
+  Neighborhoods neighborhoods;    // each point's num_neighbors nearest (correspondence search)
   KdTree tree;
   int num_neighbors = 0;
   int num_dropped_non_finite = 0;  // NaN / Inf rows left out of `points`
@@ -30,6 +32,19 @@ struct GicpScan {
 // num_neighbors finite points the scan is returned without covariances (usable() false).
 // Throws std::invalid_argument when num_neighbors < 3.
 GicpScan make_gicp_scan(const Eigen::Ref<const Points3>& points, int num_neighbors);
+
+// The point of `scan` nearest to q within sqrt(max_d2) (index -1 when none), exact: equal to
+// scan.tree.nearest. With `hint` (e.g. q's neighbour at the previous GICP iteration; -1 =
+// none) at distance rho from q, the answer lies within 2 rho of the hint, so when that fits in
+// the hint's stored neighbourhood it is found there without the tree; else the closest point of
+// that neighbourhood becomes the hint (at most kMaxNeighborhoodHops tries), then the tree.
+Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int hint);
+
+// Neighbourhood tries before the tree search. 2: on the bench's pairs 55-74 % of all GICP
+// correspondence searches (64-87 % of those with a previous neighbour) end in a neighbourhood,
+// the second try adding 7-8 points; it cut the alignment's time by a further 5-8 % on the
+// simulated pairs, 4 tries no more than noise.
+inline constexpr int kMaxNeighborhoodHops = 2;
 
 enum class RobustKernel { kNone, kHuber };
 

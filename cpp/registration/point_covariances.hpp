@@ -17,9 +17,16 @@ inline constexpr double kPlaneEpsilon = 1e-3;
 // num_neighbors nearest (itself included) in `tree`, which was built from `points`. The sign
 // is arbitrary (a plane covariance does not see it). Throws std::invalid_argument unless
 // tree.size() >= num_neighbors >= 3. Neighbours that all coincide give an arbitrary (but unit)
-// normal.
+// normal. With `neighborhoods`, also each point's neighbours: their indices, nearest first, at
+// [i * num_neighbors, (i + 1) * num_neighbors) of `indices`, and the squared distance to the
+// farthest of them in `radius2_m2` (the k-NN search finds them anyway).
+struct Neighborhoods {
+  int size = 0;                     // neighbours per point
+  std::vector<int> indices;         // points.size() * size
+  std::vector<double> radius2_m2;   // points.size()
+};
 std::vector<Vec3> plane_normals(const std::vector<Vec3>& points, const KdTree& tree,
-                                int num_neighbors);
+                                int num_neighbors, Neighborhoods* neighborhoods = nullptr);
 
 // The plane covariance of a unit normal n: V diag(eps, 1, 1) V^T = I - (1 - eps) n n^T (V
 // orthonormal with n its first column), so a normal is all GICP needs to store per point.

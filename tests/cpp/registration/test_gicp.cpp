@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <random>
 
 #include "geometry/link_projection.hpp"
 #include "geometry/se3.hpp"
@@ -205,4 +206,35 @@ TEST(Gicp, LimitingStepHalvingsKeepsTheAccuracy) {
   EXPECT_NEAR(dr_b, dr_a, 0.05 * kDeg);
   std::printf("iterations %d -> %d; centre %.2f / %.2f mm, rotation %.3f / %.3f deg\n",
               a.iterations, b.iterations, 1e3 * dt_a, 1e3 * dt_b, dr_a / kDeg, dr_b / kDeg);
+}
+
+// The correspondence search through the stored neighbourhoods is exact: the same distance as
+// the KD-tree for queries near and far from the scan, with hints near, far, and none.
+TEST(Gicp, NeighbourhoodSearchEqualsTheTree) {
+  const GicpScan scan = make_gicp_scan(test::car_scan(kCarCentre, 1500, 0.01, 15), 20);
+  std::mt19937 rng(16);
+  std::normal_distribution<double> offset(0.0, 0.05);
+  std::uniform_int_distribution<int> any(0, static_cast<int>(scan.points.size()) - 1);
+  const double max_d2 = 0.3 * 0.3;
+  int by_neighbourhood = 0, out_of_range = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int near = any(rng);
+    const double spread = trial % 3 == 0 ? 0.3 : 1.0;  // some queries farther than max_d2
+    const Vec3 q = scan.points[near] + spread * Vec3(offset(rng), offset(rng), offset(rng)) +
+                   (trial % 5 == 0 ? Vec3(0.0, 0.0, 0.4) : Vec3::Zero());
+    const int hint = trial % 4 == 0 ? -1 : trial % 4 == 1 ? any(rng) : near;
+    const Neighbor expected = scan.tree.nearest(q, max_d2);
+    const Neighbor found = nearest_in_scan(scan, q, max_d2, hint);
+    ASSERT_EQ(found.index < 0, expected.index < 0) << trial;
+    if (expected.index < 0) {
+      ++out_of_range;
+      continue;
+    }
+    EXPECT_DOUBLE_EQ(found.squared_distance_m2, expected.squared_distance_m2) << trial;
+    EXPECT_DOUBLE_EQ((scan.points[found.index] - q).squaredNorm(), found.squared_distance_m2);
+    const double rho2 = hint >= 0 ? (scan.points[hint] - q).squaredNorm() : 1e9;
+    by_neighbourhood += 4.0 * rho2 <= scan.neighborhoods.radius2_m2[hint >= 0 ? hint : 0];
+  }
+  EXPECT_GT(by_neighbourhood, 300);  // both paths exercised
+  EXPECT_GT(out_of_range, 30);
 }
