@@ -115,11 +115,16 @@ Linearization linearize(const GicpScan& source, const GicpScan& target, const Ma
   Mat3 H_vv = Mat3::Zero(), H_vw = Mat3::Zero(), H_ww = Mat3::Zero();
   Vec3 b_v = Vec3::Zero(), b_w = Vec3::Zero();
   const double one_minus_eps = 1.0 - kPlaneEpsilon;
-  for (std::size_t i = 0; i < source.points.size(); ++i) {
+  // Source points in their tree's leaf order: consecutive points are close, so a point without
+  // a previous neighbour (first iteration) borrows the last one found as its hint.
+  int last_found = -1;
+  for (const int i : source.tree.leaf_order()) {
     const Vec3 q = R * source.points[i] + t;
-    const Neighbor nn = nearest_in_scan(target, q, max_d2, (*neighbor_of)[i]);
+    const int hint = (*neighbor_of)[i] >= 0 ? (*neighbor_of)[i] : last_found;
+    const Neighbor nn = nearest_in_scan(target, q, max_d2, hint);
     (*neighbor_of)[i] = nn.index;
     if (nn.index < 0) continue;
+    last_found = nn.index;
     const Vec3 e = target.points[nn.index] - q;
     // R C_s R^T = I - (1 - eps) m m^T with m = R n_s (point_covariances.hpp): 9 products
     // instead of two 3x3 matrix products.
