@@ -52,9 +52,13 @@ BevPoint BevRectangle::centre() const {
 }
 
 void BevRectangle::extend_away_from_sensor(int axis, double size) {
-  if (extent(axis) >= size) return;
   // the sensor projects to 0: a rectangle beyond it (centre > 0) grows its far edge hi
-  if (lo[axis] + hi[axis] >= 0.0) {
+  extend_edge(axis, size, lo[axis] + hi[axis] >= 0.0);
+}
+
+void BevRectangle::extend_edge(int axis, double size, bool grow_hi) {
+  if (extent(axis) >= size) return;
+  if (grow_hi) {
     hi[axis] = lo[axis] + size;
   } else {
     lo[axis] = hi[axis] - size;

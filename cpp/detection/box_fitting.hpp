@@ -30,6 +30,8 @@ struct BevRectangle {
   // Grows `axis` to `size` m (if shorter) by moving the edge farther from the sensor, the
   // side a LiDAR cannot see.
   void extend_away_from_sensor(int axis, double size);
+  // Grows `axis` to `size` m (if shorter) by moving its hi edge (grow_hi) or its lo edge.
+  void extend_edge(int axis, double size, bool grow_hi);
 };
 
 // Best rectangle of `points` (at least 1; a regular subsample of max_fit_points is used for

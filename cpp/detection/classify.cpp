@@ -49,6 +49,24 @@ bool side_densely_seen(const BevRectangle& f, int axis, const DetectorOptions& o
   return range * o.sensor_azimuth_step_deg * M_PI / 180.0 < o.cluster_gap_m * sin_view;
 }
 
+// deg, the occlusion of one azimuth side decides which end of a partly seen car is hidden
+// only if its length axis is at least this far from the line of sight: nearer to it (a rear
+// view) both ends lie at about the same azimuth and the far end is hidden by the car itself.
+constexpr double kMinOccludedEndViewDeg = 30.0;
+
+// +1 / -1: the hi / lo end of `axis` is hidden by something nearer (or lies past the field's
+// end) while the other end's azimuth side is open; 0: neither or both, or a view along `axis`.
+int hidden_end_of(const ClusterShape& s, const BevRectangle& f, int axis) {
+  if (s.hidden_low_azimuth == s.hidden_high_azimuth) return 0;
+  const BevPoint centre = f.centre(), a = f.axis_direction(axis);
+  const double along = std::abs(a.x * centre.x + a.z * centre.z) / std::hypot(centre.x, centre.z);
+  if (along > std::cos(kMinOccludedEndViewDeg * M_PI / 180.0)) return 0;
+  // the hi end lies at the larger azimuth if moving along +axis turns the bearing right
+  // (azimuth atan2(x, z) grows): d(azimuth) ~ (a.x z - a.z x) / r^2
+  const bool hi_is_high_azimuth = a.x * centre.z - a.z * centre.x > 0.0;
+  return hi_is_high_azimuth == s.hidden_high_azimuth ? +1 : -1;
+}
+
 // the car's length axis and its extended footprint, or nullopt if the footprint is no car's
 std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o) {
   const BevRectangle& f = s.footprint;
@@ -80,8 +98,13 @@ std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o)
                            seen_length >= o.car_min_length_m &&
                            side_densely_seen(f, length_axis, o);
   BevRectangle box = f;
-  box.extend_away_from_sensor(length_axis, length_seen ? seen_length + o.car_hidden_end_m
-                                                       : o.car_length_m);
+  const double length = length_seen ? seen_length + o.car_hidden_end_m : o.car_length_m;
+  const int hidden_end = length_seen ? 0 : hidden_end_of(s, f, length_axis);
+  if (hidden_end != 0) {
+    box.extend_edge(length_axis, length, hidden_end > 0);
+  } else {
+    box.extend_away_from_sensor(length_axis, length);
+  }
   box.extend_away_from_sensor(1 - length_axis, o.car_width_m);
   Detection d = make_box(s, box, length_axis, s.top_m, ObjectClass::kCar);
   d.length_seen = length_seen;

@@ -37,6 +37,9 @@ struct ClusterShape {
   // a third of the bicycle's length
   double upper_extent_m = 0;
   int num_points = 0;
+  // something nearer than the cluster (or the end of the field) hides the view just past its
+  // smallest / largest azimuth: the object may go on there (occlusion.hpp)
+  bool hidden_low_azimuth = false, hidden_high_azimuth = false;
 };
 
 // The detection the cluster is, or nullopt (too tall, too big, floating, no class fits).

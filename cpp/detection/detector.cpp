@@ -7,6 +7,7 @@
 
 #include "detection/euclidean_clustering.hpp"
 #include "detection/ground_removal.hpp"
+#include "detection/occlusion.hpp"
 #include "detection/scene_points.hpp"
 
 namespace twistslam::detection {
@@ -52,8 +53,14 @@ std::vector<Detection> drop_car_pieces(std::vector<Detection> all) {
 }
 
 ClusterShape shape_of(const std::vector<int>& members, const std::vector<ScenePoint>& pts,
-                      const std::vector<float>& above, const DetectorOptions& o) {
+                      const std::vector<float>& above, const OcclusionMap& occlusion,
+                      const DetectorOptions& o) {
   ClusterShape s;
+  // whether something nearer (or the field's end) hides what lies past the azimuth edges
+  // (all returns: the footprint's low ones miss the near part of a car beside the sensor,
+  // below the lowest beam)
+  s.hidden_low_azimuth = occlusion.hidden_beyond(pts, members, -1);
+  s.hidden_high_azimuth = occlusion.hidden_beyond(pts, members, +1);
   s.num_points = static_cast<int>(members.size());
   std::vector<BevPoint> bev;
   bev.reserve(members.size());
@@ -111,13 +118,15 @@ DetectorResult detect(const Eigen::Ref<const Points3>& points_c, const DetectorO
 
   t = Clock::now();
   const std::vector<std::vector<int>> clusters = cluster_bev(scene.points, obstacle, options);
+  const OcclusionMap occlusion(scene.points, obstacle,
+                               options.front_only ? selection_half_angle_deg(options) : 180.0);
   out.num_clusters = static_cast<int>(clusters.size());
   out.timings.cluster_ms = ms_since(t);
 
   t = Clock::now();
   std::vector<Detection> candidates;
   for (const std::vector<int>& members : clusters) {
-    const ClusterShape shape = shape_of(members, scene.points, above, options);
+    const ClusterShape shape = shape_of(members, scene.points, above, occlusion, options);
     if (std::optional<Detection> d = classify(shape, options)) candidates.push_back(*d);
   }
   out.detections = drop_car_pieces(std::move(candidates));
