@@ -111,7 +111,8 @@ Linearization linearize(const GicpScan& source, const GicpScan& target, const Ma
   const bool huber = o.kernel == RobustKernel::kHuber;
   // J = [-I, hat(q)] for e(delta) = e - delta_v + q x delta_w (T <- exp(delta) T), so
   // J^T W J = [W, -W Q; Q W, -Q W Q] and J^T W e = [-W e; (W e) x q] with Q = hat(q): the
-  // blocks are accumulated directly (a third of the flops of the dense 6x3 products).
+  // blocks are accumulated directly (less than half the multiplications of the dense 6x3
+  // products).
   Mat3 H_vv = Mat3::Zero(), H_vw = Mat3::Zero(), H_ww = Mat3::Zero();
   Vec3 b_v = Vec3::Zero(), b_w = Vec3::Zero();
   const double one_minus_eps = 1.0 - kPlaneEpsilon;
