@@ -41,6 +41,9 @@ struct TrackFrame {
   // one, T_w_o(this) = M_w_registered T_w_o(previous), measured by GICP of the object scans
   bool registered = false;
   Mat4 M_w_registered = Mat4::Identity();
+  // its sigmas (m/frame at the object's centre, rad/frame in the link's rotation), from
+  // GICP's information; zero: e_reg uses the options' fixed sigmas
+  Vec2 reg_sigma = Vec2::Zero();
 
   bool has_detection() const { return detection_index >= 0; }
 };

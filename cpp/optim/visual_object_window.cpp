@@ -74,8 +74,10 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
     for (int i = 0; i + 1 < n; ++i) {
       if (!w.has_registration[i] || i + 1 < w.num_fixed_frames) continue;
       const Vec6 xi_r = geometry::se3_log(S * w.M_w_reg[i] * S_inv);  // eq. 7
+      const bool own_sigma = static_cast<int>(w.reg_sigma.size()) == n && w.reg_sigma[i].minCoeff() > 0;
       b.add_detection_twist(object_block[i], object_block[i + 1], Pi, xi_r,
-                            o.reg_sigma_translation, o.reg_sigma_rotation, o.huber_reg);
+                            own_sigma ? w.reg_sigma[i].x() : o.reg_sigma_translation,
+                            own_sigma ? w.reg_sigma[i].y() : o.reg_sigma_rotation, o.huber_reg);
     }
   }
   out.num_residuals = b.num_residuals();

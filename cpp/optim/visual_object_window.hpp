@@ -44,6 +44,8 @@ struct VisualObjectWindow {
   std::vector<char> has_detection;
   std::vector<Mat4> M_w_reg;
   std::vector<char> has_registration;
+  // its sigmas (m/frame, rad/frame) per entry, or none: the options' fixed sigmas
+  std::vector<Vec2> reg_sigma;
 };
 
 struct VisualObjectWindowOptions {

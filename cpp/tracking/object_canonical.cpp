@@ -9,11 +9,17 @@
 #include "geometry/so3.hpp"
 #include "objects/association.hpp"
 #include "objects/box_offset.hpp"
+#include "objects/box_travel.hpp"
 #include "tracking/object_point_helpers.hpp"
 #include "tracking/object_tracker.hpp"
 
 namespace twistslam::tracking {
 using detail::transform;
+
+namespace {
+// a line through fewer boxes is no direction: two boxes are the first-to-last difference
+constexpr int kHeadingMinBoxes = 3;
+}  // namespace
 
 void ObjectTracker::make_canonical(int c, const Mat4& T_w_box) {
   objects::ObjectTrack& track = tracks_[c];
@@ -30,18 +36,21 @@ void ObjectTracker::make_canonical(int c, const Mat4& T_w_box) {
 
 void ObjectTracker::check_heading_from_motion(int c) {
   objects::ObjectTrack& track = tracks_[c];
-  const objects::TrackFrame* start = track.at(track.canonical_frame);
-  if (!start || !start->has_detection() || !track.last().has_detection() ||
-      !(lidar_options_.heading_from_motion_m > 0))
-    return;
+  if (!track.last().has_detection() || !(lidar_options_.heading_from_motion_m > 0)) return;
   // the motion of the box centres, not of the tracked poses: boxes do not drift, while a far
   // cluster's visual twist can run the wrong way for frames (an oncoming car at 50 m turned a
-  // correct oracle box around, urban seed 1)
-  const Vec3 moved = track.last().T_w_o_detected.topRightCorner<3, 1>() -
-                     start->T_w_o_detected.topRightCorner<3, 1>();
-  if (moved.norm() < lidar_options_.heading_from_motion_m) return;
+  // correct oracle box around, urban seed 1); a line through all of them, not the first box
+  // to the last: a wrong first box (2 m off) decided the direction alone
+  std::vector<objects::BoxCentre> centres;
+  for (const objects::TrackFrame& row : track.frames)
+    if (row.frame >= track.canonical_frame && row.has_detection())
+      centres.push_back({row.frame, row.T_w_o_detected.topRightCorner<3, 1>()});
+  const objects::BoxTravel travel = objects::box_travel(centres);
+  if (!travel.valid || travel.inliers < kHeadingMinBoxes ||
+      travel.distance_m < lidar_options_.heading_from_motion_m)
+    return;
   track.heading_from_motion = true;
-  if (track.last().T_w_o.block<3, 1>(0, 0).dot(moved) >= 0) return;
+  if (track.last().T_w_o.block<3, 1>(0, 0).dot(travel.velocity_w) >= 0) return;
   // a car drives forward: its box frame faced backwards (a LiDAR box's heading is known mod
   // pi); the frame turns by pi about its y axis, and the boxes aligned with it turn too
   make_canonical(c, objects::turned_around(track.last().T_w_o));
@@ -61,7 +70,7 @@ void ObjectTracker::refine_canonical(int c) {
     samples.push_back({geometry::se3_inverse(row.T_w_o) * row.T_w_o_detected,
                        1.0 / (sigma_range * sigma_range)});
   }
-  if (samples.size() < 2) return;
+  if (samples.size() < static_cast<size_t>(lidar_options_.refine_min_boxes)) return;
   const objects::BoxOffset offset = objects::mean_box_offset(samples);
   // a frame refined by boxes that disagree among themselves would chase a track whose poses
   // drift (a far cluster's wrong visual twist): most boxes must agree on the offset
@@ -74,3 +83,4 @@ void ObjectTracker::refine_canonical(int c) {
 }
 
 }  // namespace twistslam::tracking
+

@@ -207,6 +207,7 @@ void ObjectTracker::refine_window(int c) {
     const bool next = r + 1 < first + rows && track.frames[r + 1].registered;
     w.M_w_reg.push_back(next ? track.frames[r + 1].M_w_registered : Mat4::Identity());
     w.has_registration.push_back(next);
+    w.reg_sigma.push_back(next ? track.frames[r + 1].reg_sigma : Vec2::Zero());
   }
   optim::VisualObjectWindowOptions wo;
   wo.use_detection_twist = lidar_options_.use_detection_twist;

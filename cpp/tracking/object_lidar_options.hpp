@@ -19,6 +19,7 @@ struct ObjectLidarOptions {
   double refine_min_shift_m = 0.01;        // smaller offsets leave the frame as it is
   double refine_min_turn_rad = 0.002;      // ... and smaller turns
   double refine_min_agreement = 0.6;       // fraction of the boxes within 1 m / 15 deg of the mean
+  int refine_min_boxes = 5;                // fewer boxes in the track: the first box's frame stays
   // e_det and the detection pose prior in the object window (optim/visual_object_window.hpp)
   bool use_detection_twist = true;
   double det_sigma_translation = 0.2;      // m/frame
@@ -35,8 +36,15 @@ struct ObjectLidarOptions {
   int min_scan_points = 30;                // fewer: no scan this frame
   double reg_max_rmse_m = 0.3;             // a registration with a larger residual is refused
   double reg_min_inlier_fraction = 0.5;    // ... or fewer of the scan's points matched
-  double reg_sigma_translation = 0.03;     // m/frame
+  double reg_sigma_translation = 0.03;     // m/frame (fixed, without reg_sigma_from_information)
   double reg_sigma_rotation = 0.005;       // rad/frame
+  // per-registration sigmas: scale * the marginal standard deviation of GICP's inverse
+  // information (at the object's centre, in the link's rotation), at least the floors
+  bool reg_sigma_from_information = true;
+  double reg_information_scale_translation = 1.0;
+  double reg_information_scale_rotation = 0.5;
+  double reg_min_sigma_translation = 0.01;  // m/frame
+  double reg_min_sigma_rotation = 0.001;    // rad/frame
   double huber_reg = 2.0;                  // sigmas
 };
 
@@ -52,6 +60,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("refine_min_shift_m", o.refine_min_shift_m, 0.0, 100.0);
   visit("refine_min_turn_rad", o.refine_min_turn_rad, 0.0, 10.0);
   visit("refine_min_agreement", o.refine_min_agreement, 0.0, 1.0);
+  visit("refine_min_boxes", o.refine_min_boxes, 2, 1000000);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);
   visit("det_sigma_translation", o.det_sigma_translation, 1e-6, 100.0);
   visit("det_sigma_rotation", o.det_sigma_rotation, 1e-6, 10.0);
@@ -67,6 +76,11 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("reg_min_inlier_fraction", o.reg_min_inlier_fraction, 0.0, 1.0);
   visit("reg_sigma_translation", o.reg_sigma_translation, 1e-6, 100.0);
   visit("reg_sigma_rotation", o.reg_sigma_rotation, 1e-6, 10.0);
+  visit("reg_sigma_from_information", o.reg_sigma_from_information, 0, 1);
+  visit("reg_information_scale_translation", o.reg_information_scale_translation, 1e-6, 1e6);
+  visit("reg_information_scale_rotation", o.reg_information_scale_rotation, 1e-6, 1e6);
+  visit("reg_min_sigma_translation", o.reg_min_sigma_translation, 1e-6, 100.0);
+  visit("reg_min_sigma_rotation", o.reg_min_sigma_rotation, 1e-6, 10.0);
   visit("huber_reg", o.huber_reg, 0.0, 1000.0);
 }
 

@@ -4,9 +4,11 @@
 // with the object's scan of the previous frame, starting from the tracked motion and under the
 // object's link. The registered motion M_w (T_w_o(i) = M_w T_w_o(i-1)) joins the object window
 // as e_reg.
+#include <algorithm>
 #include <cmath>
 
 #include "geometry/se3.hpp"
+#include "objects/motion_uncertainty.hpp"
 #include "registration/gicp.hpp"
 #include "tracking/object_point_helpers.hpp"
 #include "tracking/object_tracker.hpp"
@@ -84,6 +86,17 @@ void ObjectTracker::register_scan(int c, const Frame& frame) {
     if (usable) {
       row.registered = true;
       row.M_w_registered = geometry::se3_inverse(r.T_target_source);  // eq. 7: xi_r = log(M_w)
+      row.reg_sigma = Vec2::Zero();
+      if (lidar_options_.reg_sigma_from_information) {
+        // W_reg from GICP's own uncertainty, scaled to the errors it measured (config)
+        const objects::MotionSigmas sd = objects::registered_motion_sigmas(
+            r.information, row.M_w_registered, track.Pi, row.T_w_o.topRightCorner<3, 1>());
+        row.reg_sigma = Vec2(
+            std::max(lidar_options_.reg_min_sigma_translation,
+                     lidar_options_.reg_information_scale_translation * sd.translation_m),
+            std::max(lidar_options_.reg_min_sigma_rotation,
+                     lidar_options_.reg_information_scale_rotation * sd.rotation_rad));
+      }
     }
   }
   last_scan_[track.id] = std::move(current);

@@ -56,6 +56,10 @@ class LidarObjectsConfig:
         "drift (a far cluster's wrong twist), and refining would chase them. Oracle boxes, urban "
         "s1 det row: yaw error 46 deg (a track turned by chasing) -> 2.0 at 0.6; at 0.8 urban s0 "
         "det-reg RPE_r rose 0.31 -> 0.50 deg/m (0.34 at 0.6)", "fraction")
+    refine_min_boxes: int = param(
+        5, "the frame is refined only once the track has this many boxes: two or three boxes "
+        "of a new far track agree by chance while its first poses still swing (oracle urban s1, "
+        "an oncoming car at 45 m: the third box turned the frame by 22 deg)", "boxes")
     use_detection_twist: bool = param(True, "e_det (eq. 9) in the object window")
     det_sigma_translation: float = param(
         0.2, "twist between two boxes: LiDAR box centres scatter by ~0.1-0.15 m (the simulator's "
@@ -91,7 +95,29 @@ class LidarObjectsConfig:
         0.5, "... or one that matched fewer of the new scan's points within GICP's "
         "correspondence distance (a scan merged with another object's points, a wrong box)")
     reg_sigma_translation: float = param(
-        0.03, "GICP of car scans: 1-3 cm per pair (benchmarks/bench_gicp.py)", "m/frame")
-    reg_sigma_rotation: float = param(0.005, "GICP of car scans: 0.1-0.3 deg per pair", "rad/frame")
+        0.03, "fixed e_reg sigma when reg_sigma_from_information is off: GICP of car scans, "
+        "1-3 cm per pair (benchmarks/bench_gicp.py)", "m/frame")
+    reg_sigma_rotation: float = param(
+        0.005, "as reg_sigma_translation: GICP of car scans, 0.1-0.3 deg per pair", "rad/frame")
+    reg_sigma_from_information: bool = param(
+        True, "each registration's e_reg sigmas follow GICP's own uncertainty (the marginal "
+        "standard deviations of its inverse information, translation at the object's centre, "
+        "rotation about the link's axes) times a scale: a far car's scan of 50 points is ~20x "
+        "less certain in yaw than a near car's of 2500 (simulated pairs: median yaw error 0.03 "
+        "deg at 0-10 m, 0.44 deg at 30-45 m), which one fixed sigma cannot weigh: it was too "
+        "tight for far urban cars and too loose for near crowded ones")
+    reg_information_scale_translation: float = param(
+        1.0, "error / information standard deviation at the centre, median over consecutive "
+        "car-scan pairs: 0.32 simulated, 0.6-0.9 on real 0001 beyond 10 m against the labels; "
+        "1.0 makes the median real error ~0.7 sigma", "ratio")
+    reg_information_scale_rotation: float = param(
+        0.5, "the same for the yaw: 0.22 simulated at every range, 0.25-0.4 on real 0001 (0.64 "
+        "below 10 m, few pairs); 0.5 makes the median real error ~0.6 sigma", "ratio")
+    reg_min_sigma_translation: float = param(
+        0.01, "floor: real KITTI pairs end ~2 cm off the labels whatever the information says",
+        "m/frame")
+    reg_min_sigma_rotation: float = param(
+        0.001, "floor (0.06 deg): a near car's dense scan would otherwise outweigh every other "
+        "term", "rad/frame")
     huber_reg: float = param(2.0, "a registration to a wrong scan (merged objects) is an "
                              "outlier", "sigmas")
