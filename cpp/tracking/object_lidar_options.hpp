@@ -20,6 +20,9 @@ struct ObjectLidarOptions {
   double refine_min_turn_rad = 0.002;      // ... and smaller turns
   double refine_min_agreement = 0.6;       // fraction of the boxes within 1 m / 15 deg of the mean
   int refine_min_boxes = 5;                // fewer boxes in the track: the first box's frame stays
+  // a track whose origin lies in another's box (grown by this) this frame and that has fewer
+  // boxes is not reported in it (two clusters on one car); < 0: never
+  double duplicate_margin_m = 0.3;
   // e_det and the detection pose prior in the object window (optim/visual_object_window.hpp)
   bool use_detection_twist = true;
   double det_sigma_translation = 0.2;      // m/frame
@@ -61,6 +64,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("refine_min_turn_rad", o.refine_min_turn_rad, 0.0, 10.0);
   visit("refine_min_agreement", o.refine_min_agreement, 0.0, 1.0);
   visit("refine_min_boxes", o.refine_min_boxes, 2, 1000000);
+  visit("duplicate_margin_m", o.duplicate_margin_m, -1.0, 10.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);
   visit("det_sigma_translation", o.det_sigma_translation, 1e-6, 100.0);
   visit("det_sigma_rotation", o.det_sigma_rotation, 1e-6, 10.0);

@@ -127,6 +127,9 @@ class ObjectTracker : public ObjectBundleTerms {
   int free_instance_under(const geometry::Box3D& box) const;
   // Clusters from first_new on (started this frame) take the boxes still unused.
   void attach_new_cluster_detections(const Frame& frame, int first_new);
+  // Two tracks on one car this frame (one's origin inside the other's canonical box): the one
+  // with fewer boxes is not reported in this frame (object_duplicates.cpp).
+  void hide_duplicate_tracks(const Frame& frame);
   // Step 4: stereo keypoints of `instance` not claimed yet -> points of cluster c.
   void add_points(int c, const Frame& frame, int instance);
   // Stereo keypoints of `instance` no cluster claimed, in the world frame.

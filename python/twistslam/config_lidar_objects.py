@@ -60,6 +60,13 @@ class LidarObjectsConfig:
         5, "the frame is refined only once the track has this many boxes: two or three boxes "
         "of a new far track agree by chance while its first poses still swing (oracle urban s1, "
         "an oncoming car at 45 m: the third box turned the frame by 22 deg)", "boxes")
+    duplicate_margin_m: float = param(
+        0.3, "two tracks on one car (a second cluster on it, seeded on a wrong box): a track "
+        "whose origin lies inside another canonical track's box grown by this margin, in the "
+        "same frame, is not reported there if it has fewer boxes (the other one, with more, is "
+        "the car). A box's centre scatters by 0.1-0.3 m; cars side by side are >= 1.8 m apart "
+        "centre to centre, so a 0.3 m margin never joins two cars. Oracle urban s1: a 2-box "
+        "duplicate track turned by 170 deg was the car's main track. < 0: never", "m")
     use_detection_twist: bool = param(True, "e_det (eq. 9) in the object window")
     det_sigma_translation: float = param(
         0.2, "twist between two boxes: LiDAR box centres scatter by ~0.1-0.15 m (the simulator's "

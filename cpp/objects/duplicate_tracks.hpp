@@ -1,0 +1,26 @@
+#pragma once
+// Two tracks on one object in one frame: the camera side can start a second cluster on a car
+// already tracked (a split mask, a re-seeded instance), and the one-to-one box association
+// then feeds only one of them; the other lives on with whatever frame its few boxes gave it.
+// A track whose origin lies in another's canonical box footprint is the same object; the one
+// with more boxes is the object, the other a duplicate (not reported in that frame).
+#include <vector>
+
+#include "geometry/types.hpp"
+
+namespace twistslam::objects {
+
+struct TrackFootprint {
+  Mat4 T_w_o = Mat4::Identity();  // this frame's pose (origin: box centre when canonical)
+  Vec3 size = Vec3::Zero();       // l, w, h (m); a box only when canonical and positive
+  bool canonical = false;         // the object frame is a box frame
+  int class_id = -1;
+  int boxes = 0;                  // detections associated over the track's life
+};
+
+// Per track: whether its origin lies inside the footprint (length x width, the height is not
+// compared: both stand on the road) of another canonical track of its class, grown by
+// margin_m, that has more boxes (equal: the earlier in the list). margin_m < 0: none.
+std::vector<char> duplicate_tracks(const std::vector<TrackFootprint>& tracks, double margin_m);
+
+}  // namespace twistslam::objects
