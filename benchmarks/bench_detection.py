@@ -1,17 +1,23 @@
 """Speed and quality of the classical LiDAR detector (docs/detection.md).
 
     .venv/bin/python benchmarks/bench_detection.py [--data DIR] [--repeats 5]
-        [--sim .cache/sim/urban-seed0-n100 --frames 100] [--set KEY=VALUE ...]
+        [--tracking ROOT --seq 0001] [--sim ROOT [ROOT ...] --frames 100]
+        [--set KEY=VALUE ...]
 
 Real KITTI object frames (``--data``, default ``$TWISTSLAM_DATA/kitti_object``; ~120k points
 per scan): median wall ms per scan of the whole detector and of each stage (region of
-interest, road, clustering, fit + classes), ``--repeats`` runs per frame; then, against
-``label_2`` Cars, recall and precision at BEV IoU 0.5 and 0.7 (greedy matching by score, a
-detection on a Van or DontCare box is neither right nor wrong), for labels within 30 m and
-within the detector's range. ``--tracking ROOT`` adds the same
-table on a real tracking sequence (``--seq``, default 0001). ``--sim ROOT`` adds the same table on a simulated KITTI-layout
-sequence (its ``label_02/0000.txt``) plus the median yaw (mod pi) and size errors of the
-matched cars. The time includes the float32 -> float64 conversion of the scan.
+interest, road, clustering, fit + classes), ``--repeats`` runs per frame (0: no timing); then,
+against ``label_2`` Cars, recall and precision at BEV IoU 0.5 and 0.7 (greedy matching by
+score, a detection on a Van or DontCare box is neither right nor wrong), for labels within
+30 m and within the detector's range, and the KITTI AP_R40 of the Car class (BEV and 3D, IoU
+0.7 / 0.5, per difficulty). ``--tracking ROOT`` adds the recall table on a real tracking
+sequence (``--seq``, default 0001); the per-box table (below) follows over all real frames.
+``--sim ROOT ...`` adds, per simulated KITTI-layout sequence (its ``label_02/0000.txt``) and
+over all of them, the recall table and the per-box table: each label's Car matched to one
+detection (BEV IoU > 0.3 or centres < 2 m, best score first), median / p90 of the BEV centre
+error, yaw error mod pi, |dl|, |dw|, the signed depth error along the line of sight, by
+range bin and by view (which faces of the true box the sensor sees), and the duplicates (a
+second car box on a matched car). The time includes the float32 -> float64 conversion.
 """
 
 from __future__ import annotations
