@@ -5,6 +5,7 @@
 #include <random>
 #include <vector>
 
+#include "geometry/se3.hpp"
 #include "geometry/types.hpp"
 
 namespace twistslam::test {
@@ -60,6 +61,13 @@ inline Points3 transformed(const Points3& points, const Mat4& T) {
     out.row(i) = (T.topLeftCorner<3, 3>() * points.row(i).transpose() + T.topRightCorner<3, 1>())
                      .transpose();
   return out;
+}
+
+// A new sampling of the car as the source scan of a registration whose true result is
+// T_target_source: the car seen after moving by T_target_source^-1.
+inline Points3 source_scan(const Vec3& centre, const Mat4& T_target_source, int n, double sigma_m,
+                           unsigned seed) {
+  return transformed(car_scan(centre, n, sigma_m, seed), geometry::se3_inverse(T_target_source));
 }
 
 }  // namespace twistslam::test

@@ -46,7 +46,7 @@ TEST(Gicp, RecoversAKnownMotionOfACarScanWithCentimetreNoise) {
   const Points3 target = test::car_scan(kCarCentre, 2000, 0.01, 1);
   // An independent sampling of the same car, seen from the source pose.
   const Points3 source =
-      test::transformed(test::car_scan(kCarCentre, 2000, 0.01, 2), geometry::se3_inverse(T_true));
+      test::source_scan(kCarCentre, T_true, 2000, 0.01, 2);
   const GicpResult r = gicp(source, target, Mat4::Identity());
   ASSERT_TRUE(r.converged) << status_name(r.status);
   const auto [dt, dr] = pose_error(T_true, r.T_target_source);
@@ -63,7 +63,7 @@ TEST(Gicp, ScansBuiltOnceGiveTheSameResult) {
   const Mat4 T_true = known_motion();
   const Points3 target = test::car_scan(kCarCentre, 1000, 0.01, 3);
   const Points3 source =
-      test::transformed(test::car_scan(kCarCentre, 1000, 0.01, 4), geometry::se3_inverse(T_true));
+      test::source_scan(kCarCentre, T_true, 1000, 0.01, 4);
   GicpOptions o;
   const GicpScan s = make_gicp_scan(source, o.num_neighbors);
   const GicpScan t = make_gicp_scan(target, o.num_neighbors);
@@ -82,7 +82,7 @@ TEST(Gicp, PlanarLinkKeepsTheMotionOutsideTheLinkAtZero) {
   const Mat4 T_true = geometry::make_pose(R, Vec3(0.5, -0.05, 0.3));
   const Points3 target = test::car_scan(kCarCentre, 1500, 0.005, 5);
   const Points3 source =
-      test::transformed(test::car_scan(kCarCentre, 1500, 0.005, 6), geometry::se3_inverse(T_true));
+      test::source_scan(kCarCentre, T_true, 1500, 0.005, 6);
   GicpOptions o;
   o.projector = geometry::projector_planar(normal);
   const Mat4 T_init = geometry::make_pose(Mat3::Identity(), Vec3(0.3, 0.0, 0.1));
@@ -119,7 +119,7 @@ TEST(Gicp, NonFinitePointsAreDroppedWhenTheScanIsBuilt) {
   const Mat4 T_true = known_motion();
   Points3 target = test::car_scan(kCarCentre, 1000, 0.01, 8);
   const Points3 source =
-      test::transformed(test::car_scan(kCarCentre, 1000, 0.01, 9), geometry::se3_inverse(T_true));
+      test::source_scan(kCarCentre, T_true, 1000, 0.01, 9);
   target(3, 0) = std::numeric_limits<double>::quiet_NaN();
   target(10, 2) = std::numeric_limits<double>::infinity();
   const GicpScan t = make_gicp_scan(target, 20);
@@ -160,7 +160,7 @@ TEST(Gicp, InformationEqualsTheDenseGaussNewtonHessian) {
   const Mat4 T_true = known_motion();
   const GicpScan t = make_gicp_scan(test::car_scan(kCarCentre, 800, 0.01, 11), 20);
   const GicpScan s = make_gicp_scan(
-      test::transformed(test::car_scan(kCarCentre, 800, 0.01, 12), geometry::se3_inverse(T_true)),
+      test::source_scan(kCarCentre, T_true, 800, 0.01, 12),
       20);
   GicpOptions o;
   o.max_iterations = 1;
@@ -192,7 +192,7 @@ TEST(Gicp, LimitingStepHalvingsKeepsTheAccuracy) {
   const Mat4 T_true = known_motion();
   const Points3 target = test::car_scan(kCarCentre, 1000, 0.02, 23);
   const Points3 source =
-      test::transformed(test::car_scan(kCarCentre, 1000, 0.02, 24), geometry::se3_inverse(T_true));
+      test::source_scan(kCarCentre, T_true, 1000, 0.02, 24);
   GicpOptions unlimited;
   unlimited.max_step_halvings = 1000;
   const GicpResult a = gicp(source, target, Mat4::Identity(), unlimited);
