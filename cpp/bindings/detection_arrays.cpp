@@ -8,7 +8,8 @@ namespace twistslam::bindings {
 std::vector<objects::Detection> detections_from_arrays(const py::handle& boxes,
                                                        const py::handle& scores,
                                                        const py::handle& class_ids,
-                                                       const py::handle& planar) {
+                                                       const py::handle& planar,
+                                                       const py::handle& open_ends) {
   const DoubleArray b = as_rows(boxes, "boxes", 7);
   const auto n = b.shape(0);
   const DoubleArray s = as_double_array(scores, "scores");
@@ -25,12 +26,27 @@ std::vector<objects::Detection> detections_from_arrays(const py::handle& boxes,
   if (s.ndim() != 1 || s.shape(0) != n || c.ndim() != 1 || c.shape(0) != n)
     throw py::value_error("scores, class_ids: expected (" + std::to_string(n) +
                           ",) arrays like boxes, got " + shape_string(s) + ", " + shape_string(c));
+  py::array_t<std::int64_t, py::array::c_style | py::array::forcecast> ends;
+  if (!open_ends.is_none()) {
+    ends = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(open_ends);
+    if (!ends) throw py::type_error("open_ends: expected an integer array");
+    if (ends.ndim() != 1 || ends.shape(0) != n)
+      throw py::value_error("open_ends: expected (" + std::to_string(n) + ",) like boxes, got " +
+                            shape_string(ends));
+  }
   std::vector<objects::Detection> dets(n);
   for (py::ssize_t i = 0; i < n; ++i) {
     dets[i].box = geometry::Box3D::from_row(b.data() + 7 * i);
     dets[i].score = s.data()[i];
     dets[i].class_id = static_cast<int>(c.data()[i]);
     dets[i].planar = planar.is_none() ? true : p.data()[i];
+    if (!open_ends.is_none()) {
+      const std::int64_t e = ends.data()[i];
+      if (e < -1 || e > 1)
+        throw py::value_error("open_ends[" + std::to_string(i) + "]: expected -1, 0 or 1, got " +
+                              std::to_string(e));
+      dets[i].open_end = static_cast<int>(e);
+    }
   }
   return dets;
 }

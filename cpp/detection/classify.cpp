@@ -67,6 +67,17 @@ int hidden_end_of(const ClusterShape& s, const BevRectangle& f, int axis) {
   return hi_is_high_azimuth == s.hidden_high_azimuth ? +1 : -1;
 }
 
+// m, a prior that moved the box centre less than this along its heading left both ends as seen
+constexpr double kMinOpenShift = 0.01;
+
+// +1 / -1: the box (yaw's heading (cos, -sin) in (x, z)) grew past the seen footprint towards
+// its +x / -x end; 0: it did not grow along its length
+int open_end_of(const BevRectangle& seen, const BevRectangle& box, double yaw) {
+  const BevPoint a = seen.centre(), b = box.centre();
+  const double along = (b.x - a.x) * std::cos(yaw) - (b.z - a.z) * std::sin(yaw);
+  return along > kMinOpenShift ? +1 : along < -kMinOpenShift ? -1 : 0;
+}
+
 // the car's length axis and its extended footprint, or nullopt if the footprint is no car's
 std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o) {
   const BevRectangle& f = s.footprint;
@@ -108,6 +119,7 @@ std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o)
   box.extend_away_from_sensor(1 - length_axis, o.car_width_m);
   Detection d = make_box(s, box, length_axis, s.top_m, ObjectClass::kCar);
   d.length_seen = length_seen;
+  if (!length_seen) d.open_end = open_end_of(f, box, d.yaw);
   const double seen = std::min(1.0, f.extent(0) * f.extent(1) / (d.length * d.width));
   const double fit = std::exp(-f.mean_edge_distance / o.score_edge_distance_m);
   d.score = fit * (kUnseenAreaWeight + (1.0 - kUnseenAreaWeight) * seen);

@@ -25,6 +25,10 @@ struct Detection {
   // cars: the length was measured (an L-shape of two faces), not the car_length_m prior;
   // a box without it has its centre only as good as the prior (+- 0.2-0.3 m along the yaw)
   bool length_seen = false;
+  // cars without length_seen: the end of the box (+1 its +x end, along the yaw's heading; -1
+  // its -x end) that the prior extended past the seen face; 0 for a measured length. With a
+  // car's true length known (other frames), the centre moves by (true - length) / 2 that way.
+  int open_end = 0;
 };
 
 struct ClusterShape {

@@ -10,6 +10,9 @@ struct Detection {
   double score = 0;
   int class_id = 0;     // tracks and detections associate within a class only
   bool planar = true;   // the class moves on the ground plane (planar link), else free
+  // 0: the box's length was measured (or unknown); +1 / -1: a partly seen car, its length the
+  // detector's prior laid from the seen face towards the box's +x / -x end (x: the heading)
+  int open_end = 0;
 };
 
 }  // namespace twistslam::objects

@@ -36,6 +36,11 @@ struct TrackFrame {
   double range = 0;               // its distance from the camera, m
   double confidence = 0;          // its range-corrected score (TrackerOptions)
   int detection_index = -1;       // its index in the frame's detection list
+  // a box whose length is the detector's prior (Detection::open_end): the direction in w from
+  // its seen face to the prior's end (zero for a measured length), and how far its centre was
+  // moved that way to put that end at the track's length (update_size)
+  Vec3 open_end_w = Vec3::Zero();
+  double open_shift_m = 0;
   bool reported = false;          // part of the output (set by the tracker's output policy)
   // LiDAR registration (eq. 6-7): the object's motion in w from the previous frame to this
   // one, T_w_o(this) = M_w_registered T_w_o(previous), measured by GICP of the object scans
@@ -80,7 +85,9 @@ struct ObjectTrack {
   double mean_score() const;
   // Track confidence: mean range-corrected score of the associated detections (0 without any).
   double confidence() const;
-  // Recomputes `size` as the per-dimension median over the detected frames.
+  // Recomputes `size` as the per-dimension median over the detected frames (the length over
+  // those whose length was measured, if any), then moves every box whose length is the prior
+  // along its open end so that this end lies at the track's length from its seen face.
   void update_size();
 };
 

@@ -66,6 +66,7 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
   const objects::Detection& det = detections_[d];
   detection_used_[d] = 1;
   Mat4 T_w_box = geometry::se3_inverse(frame.T_c_w) * det.box.pose();
+  const Vec3 open_end_w = static_cast<double>(det.open_end) * T_w_box.block<3, 1>(0, 0);  // before any turn
   if (!track.canonical && lidar_options_.canonical_pose) {
     make_canonical(c, T_w_box);
     track.canonical_frame = row.frame;
@@ -80,6 +81,8 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
   }
   row.T_w_o_detected = T_w_box;
   row.detected_size = Vec3(det.box.length, det.box.width, det.box.height);
+  row.open_end_w = open_end_w;
+  row.open_shift_m = 0;
   row.score = det.score;
   row.confidence = det.score;
   row.range = det.box.center.norm();

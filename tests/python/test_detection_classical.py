@@ -110,6 +110,32 @@ def test_boxes_follow_the_detections3d_contract(sim_sequence):
     assert set(dets.classes) <= {"Car", "Pedestrian", "Cyclist"}
     assert np.all((dets.boxes[:, 6] >= -np.pi / 2) & (dets.boxes[:, 6] < np.pi / 2))
     assert np.all(dets.boxes[:, 2] > 0)  # front_only: the camera's field of view
+    # open_end: a prior-length car's unseen end; a measured one has none
+    assert dets.open_end.dtype == np.int8 and set(dets.open_end.tolist()) <= {-1, 0, 1}
+    assert np.all(dets.open_end[dets.classes != "Car"] == 0)
+
+
+def test_open_ends_point_away_from_the_sensor_on_rear_views(sim_sequence):
+    # urban: cars along the street, most seen from behind or in front; the prior's end of a
+    # box is the one away from the sensor unless something nearer hides its other end
+    dets = ClassicalDetector()(sim_sequence[0])
+    is_open = dets.open_end != 0
+    assert is_open.sum() >= 2, "urban has rear views: some boxes have the prior's length"
+    assert np.allclose(dets.boxes[is_open, 3], CAR_LENGTH_PRIOR_M, atol=0.05)
+    heading = np.stack([np.cos(dets.boxes[:, 6]), -np.sin(dets.boxes[:, 6])], axis=1)
+    ray = dets.boxes[:, [0, 2]] / np.linalg.norm(dets.boxes[:, [0, 2]], axis=1, keepdims=True)
+    outward = np.sum(dets.open_end[:, None] * heading * ray, axis=1)
+    assert np.mean(outward[is_open] > 0) >= 0.75, outward[is_open]
+
+
+def test_detections3d_refuses_bad_open_ends():
+    box = [[0.0, 1.0, 10.0, 4.0, 1.8, 1.5, 0.0]]
+    with pytest.raises(ValueError, match="open_end"):
+        Detections3D(box, [1.0], ["Car"], open_end=[2])
+    with pytest.raises(ValueError, match="open_end"):
+        Detections3D(box, [1.0], ["Car"], open_end=[0, 1])
+    assert Detections3D(box, [1.0], ["Car"]).open_end.tolist() == [0]  # files: none known
+    assert Detections3D(box, [1.0], ["Car"], open_end=[-1]).select([0]).open_end.tolist() == [-1]
 
 
 def test_empty_and_nan_scans():

@@ -36,11 +36,17 @@ class Detections3D:
         KITTI ``rotation_y`` in radians (about the camera's y axis; 0 faces the camera's x).
     scores : (N,) float64 confidences, larger is surer (not necessarily probabilities).
     classes : (N,) str, KITTI type names (``Car``, ``Pedestrian``, ``Cyclist``, ...).
+    open_end : (N,) int8, optional. 0: the box's length was measured (or the source does not
+        say: files, 3DSSD). +1 / -1: a partly seen car whose length is the detector's prior,
+        laid from its seen face towards the box's +x / -x end (x along ``yaw``'s heading);
+        the LiDAR fusion moves such a box's centre that way once other frames measured the
+        car's length (the classical detector sets it).
     """
 
     boxes: np.ndarray = field(default_factory=lambda: np.zeros((0, 7)))
     scores: np.ndarray = field(default_factory=lambda: np.zeros(0))
     classes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=object))
+    open_end: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.boxes = np.asarray(self.boxes, dtype=np.float64).reshape(-1, 7)
@@ -52,6 +58,13 @@ class Detections3D:
                              f"{len(self.classes)} classes")
         if not np.isfinite(self.boxes).all() or not np.isfinite(self.scores).all():
             raise ValueError("Detections3D: boxes and scores must be finite")
+        if self.open_end is None:
+            self.open_end = np.zeros(n, dtype=np.int8)
+        open_end = np.asarray(self.open_end).reshape(-1)
+        if len(open_end) != n or not np.isin(open_end, (-1, 0, 1)).all():
+            raise ValueError(f"Detections3D: open_end must hold {n} values in {{-1, 0, 1}}, "
+                             f"got {open_end.tolist()}")
+        self.open_end = open_end.astype(np.int8)
 
     def __len__(self) -> int:
         return len(self.boxes)
@@ -59,7 +72,7 @@ class Detections3D:
     def select(self, mask_or_index) -> "Detections3D":
         """The detections picked by a boolean mask or an index array."""
         return Detections3D(self.boxes[mask_or_index], self.scores[mask_or_index],
-                            self.classes[mask_or_index])
+                            self.classes[mask_or_index], self.open_end[mask_or_index])
 
     @classmethod
     def from_table(cls, table: "ObjectTable") -> "Detections3D":

@@ -59,8 +59,10 @@ class ClassicalDetector:
         """Detections of a scan: (N, >=3) points in the rectified camera frame (extra columns
         such as intensity are ignored; NaN / Inf rows are skipped)."""
         out = _d.detect(points_c, self.options)
-        self.last_stats = {k: v for k, v in out.items() if k not in ("boxes", "scores", "classes")}
-        return Detections3D(out["boxes"], out["scores"], np.asarray(out["classes"], dtype=object))
+        box_keys = ("boxes", "scores", "classes", "open_end")
+        self.last_stats = {k: v for k, v in out.items() if k not in box_keys}
+        return Detections3D(out["boxes"], out["scores"], np.asarray(out["classes"], dtype=object),
+                            out["open_end"])
 
     def __call__(self, frame) -> Detections3D:
         if frame.points_c is None:

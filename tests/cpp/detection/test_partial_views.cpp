@@ -65,6 +65,9 @@ TEST(PartialView, RearOnlyCarHasItsCentreBehindItsVisibleFace) {
     EXPECT_NEAR(d.centre.z() - 0.5 * d.length, rear_face, 0.15);  // the face stays put
     EXPECT_GT(d.centre.z(), rear_face + 0.4 * d.length);         // the box lies behind it
     EXPECT_NEAR(d.length, DetectorOptions{}.car_length_m, 0.05);
+    // the prior's end is the far one: along the heading times open_end points away (+z)
+    ASSERT_NE(d.open_end, 0);
+    EXPECT_GT(-d.open_end * std::sin(d.yaw), 0.9);
   }
 }
 
@@ -80,6 +83,7 @@ TEST(PartialView, ShortCarSeenAsAnLKeepsItsLength) {
   ASSERT_EQ(r.detections.size(), 1u);
   const Detection& d = r.detections[0];
   EXPECT_TRUE(d.length_seen);
+  EXPECT_EQ(d.open_end, 0);
   // the seen extent plus the far end's allowance, not the prior grown over it
   EXPECT_NEAR(d.length, car.length + DetectorOptions{}.car_hidden_end_m, 0.15);
   EXPECT_NEAR(d.centre.x(), car.x, 0.2);
@@ -122,6 +126,10 @@ TEST(PartialView, CarBesideTheSensorCutByTheFieldGrowsTowardsTheCut) {
   EXPECT_LT(yaw_error_mod_pi(d->yaw, car.yaw), 3.0 * kDeg);
   // the prior's 4.0 m from the visible front end: the centre 0.25 m ahead of the true one
   EXPECT_NEAR(d->centre.z(), car.z + 0.5 * (car.length - DetectorOptions{}.car_length_m), 0.2);
+  // the open end is the rear (-z), cut by the field, not the seen front
+  EXPECT_FALSE(d->length_seen);
+  ASSERT_NE(d->open_end, 0);
+  EXPECT_LT(-d->open_end * std::sin(d->yaw), -0.9);
 }
 
 TEST(PartialView, NoBoxOnTheSensorsSideOfItsReturnsAndNoMirroredDuplicate) {
