@@ -49,6 +49,9 @@ def test_detections_give_the_car_ahead_its_canonical_pose_and_size(sim):
     cluster = [c for c in fused.objects.objects if c.track_id == obj.track_id][0]
     gt_size = gt.tracks[AHEAD].size  # l, w, h
     assert np.abs(cluster.size - gt_size).max() < 0.3
+    # its frame is a box's, its rows say where a box was associated; without boxes none is
+    assert cluster.canonical and cluster.has_box.sum() >= 0.8 * len(cluster.frames)
+    assert not any(o.canonical or o.has_box.any() for o in alone.objects.objects)
     camera = dict(zip(fused.frames.tolist(), fused.camera_poses))
     car = gt.tracks[AHEAD]
     row_of = {int(f): k for k, f in enumerate(car.frames)}

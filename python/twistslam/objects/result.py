@@ -29,7 +29,8 @@ class TrackedObject:
     size : (3,) length, width, height (m): per-dimension median of the detections.
     velocity_kmh : (K,) speed of the box centre in the tracking frame, km/h (in the camera
         frame this is the speed relative to the moving camera).
-    detected : (K,) bool, a detection was associated in that frame.
+    detected : (K,) bool, a detection was associated in that frame (visual object tracking:
+        the cluster was tracked in it, by its keypoints).
     reported : (K,) bool, the row is written to the results (output policy, docs/objects.md).
     score : (K,) score of the associated detection (0 where none); ``mean_score`` their mean.
     confidence : the track's confidence, the mean range-corrected score of its detections
@@ -37,6 +38,11 @@ class TrackedObject:
         compares.
     range : (K,) distance of the associated detection from the camera, m (0 where none).
     backcast : number of leading rows predicted before the first detection (backcast).
+    canonical : the object frame is a 3D box's frame (origin at the box centre, x along the
+        length): always for the detections tracker; for visual object tracking once a 3D
+        detection was associated (before that the box is fitted to the cluster's points).
+    has_box : (K,) bool, a 3D detection was associated in that frame (None: same as
+        ``detected``, the detections tracker).
     """
 
     track_id: int
@@ -54,6 +60,8 @@ class TrackedObject:
     confidence: float = 0.0
     range: np.ndarray | None = None
     backcast: int = 0
+    canonical: bool = True
+    has_box: np.ndarray | None = None
 
     def __repr__(self) -> str:
         return (f"TrackedObject(id={self.track_id}, {self.cls}, {self.state}, frames "

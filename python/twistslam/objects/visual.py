@@ -114,7 +114,8 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
         frames = np.asarray(c["frames"])
         T_w_o = np.asarray(c["T_w_o"]).reshape(-1, 4, 4)
         points = np.asarray(c["points_o"]).reshape(-1, 3)
-        if c.get("canonical") and (np.asarray(c["size"]) > 0).all():
+        canonical = bool(c.get("canonical")) and bool((np.asarray(c["size"]) > 0).all())
+        if canonical:
             # the object frame is its first detection's box frame; size: the boxes' median
             T_o_box, size = np.eye(4), np.asarray(c["size"], dtype=np.float64)
         else:
@@ -131,7 +132,8 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
             T_w_o=T_w_o, size=size, velocity_kmh=_speed_kmh(T_w_box, period),
             detected=np.asarray(c["detected"], dtype=bool), reported=reported,
             score=np.zeros(len(frames)), mean_score=0.0, confidence=float(c["hits"]),
-            range=np.linalg.norm(T_w_box[:, :3, 3], axis=1)))
+            range=np.linalg.norm(T_w_box[:, :3, 3], axis=1), canonical=canonical,
+            has_box=np.asarray(c.get("detection_index", np.full(len(frames), -1))) >= 0))
         rows = np.flatnonzero(reported)
         # a cluster whose points were all culled (or a flat one) has no box to write
         if not len(rows) or calib is None or not (size > 0).all():
