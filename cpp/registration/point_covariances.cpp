@@ -10,25 +10,17 @@ std::vector<Vec3> plane_normals(const std::vector<Vec3>& points, const KdTree& t
     throw std::invalid_argument("plane_covariances: need num_neighbors >= 3 and at least "
                                 "num_neighbors points");
   std::vector<Vec3> normals(points.size());
-  std::vector<Neighbor> neighbors;
-  if (neighborhoods != nullptr) {
-    neighborhoods->size = num_neighbors;
-    neighborhoods->indices.resize(points.size() * num_neighbors);
-    neighborhoods->radius2_m2.resize(points.size());
-  }
-  for (const int i : tree.leaf_order()) {
-    tree.knn(points[i], num_neighbors, &neighbors);
-    if (neighborhoods != nullptr) {
-      int* out = neighborhoods->indices.data() + static_cast<std::size_t>(i) * num_neighbors;
-      for (int j = 0; j < num_neighbors; ++j) out[j] = neighbors[j].index;
-      neighborhoods->radius2_m2[i] = neighbors.back().squared_distance_m2;
-    }
+  Neighborhoods local;
+  Neighborhoods* nb = neighborhoods != nullptr ? neighborhoods : &local;
+  all_knn(points, tree, num_neighbors, nb);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const int* neighbors = nb->indices.data() + i * num_neighbors;
     Vec3 mean = Vec3::Zero();
-    for (const Neighbor& n : neighbors) mean += points[n.index];
-    mean /= static_cast<double>(neighbors.size());
+    for (int j = 0; j < num_neighbors; ++j) mean += points[neighbors[j]];
+    mean /= static_cast<double>(num_neighbors);
     Mat3 scatter = Mat3::Zero();
-    for (const Neighbor& n : neighbors) {
-      const Vec3 d = points[n.index] - mean;
+    for (int j = 0; j < num_neighbors; ++j) {
+      const Vec3 d = points[neighbors[j]] - mean;
       scatter.noalias() += d * d.transpose();
     }
     // Closed-form 3x3 eigen decomposition: several times faster than the iterative one and

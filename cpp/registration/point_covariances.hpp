@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "geometry/types.hpp"
+#include "registration/grid_knn.hpp"
 #include "registration/kdtree.hpp"
 
 namespace twistslam::registration {
@@ -17,14 +18,10 @@ inline constexpr double kPlaneEpsilon = 1e-3;
 // num_neighbors nearest (itself included) in `tree`, which was built from `points`. The sign
 // is arbitrary (a plane covariance does not see it). Throws std::invalid_argument unless
 // tree.size() >= num_neighbors >= 3. Neighbours that all coincide give an arbitrary (but unit)
-// normal. With `neighborhoods`, also each point's neighbours: their indices, nearest first, at
+// normal. With `neighborhoods`, also each point's neighbours: their indices (unordered), at
 // [i * num_neighbors, (i + 1) * num_neighbors) of `indices`, and the squared distance to the
-// farthest of them in `radius2_m2` (the k-NN search finds them anyway).
-struct Neighborhoods {
-  int size = 0;                     // neighbours per point
-  std::vector<int> indices;         // points.size() * size
-  std::vector<double> radius2_m2;   // points.size()
-};
+// farthest of them in `radius2_m2` (the k-NN search finds them anyway). The neighbours come from
+// all_knn (grid_knn.hpp): the KD-tree's k-NN up to ties.
 std::vector<Vec3> plane_normals(const std::vector<Vec3>& points, const KdTree& tree,
                                 int num_neighbors, Neighborhoods* neighborhoods = nullptr);
 
