@@ -1,8 +1,48 @@
 #include "registration/point_covariances.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace twistslam::registration {
+
+namespace {
+
+// Newton steps on the normalised characteristic cubic; it converges from the left, quadratically
+// unless the two smallest eigenvalues (nearly) coincide, where the normal is ill-defined anyway.
+constexpr int kMaxNewtonSteps = 30;
+
+// The unit eigenvector of the smallest eigenvalue of a symmetric 3x3 matrix, without the
+// trigonometric closed form: B = (A - tr(A)/3 I) / s, s = sqrt(tr(B0^2) / 6), has eigenvalues
+// 2 cos(.) in [-2, 2] and characteristic x^3 - 3x - det(B) = 0; its smallest root (in [-2, -1])
+// is reached by Newton from -2, then the eigenvector is the largest cross product of two rows of
+// B - x I (they span the plane orthogonal to it).
+Vec3 smallest_eigenvector(const Mat3& A) {
+  const double shift = A.trace() / 3.0;
+  Mat3 B = A;
+  B.diagonal().array() -= shift;
+  const double p2 = (B * B).trace() / 6.0;
+  if (!(p2 > 0.0)) return Vec3::UnitX();  // isotropic: any direction
+  B /= std::sqrt(p2);
+  const double det = B.determinant();
+  double x = -2.0;
+  for (int step = 0; step < kMaxNewtonSteps; ++step) {
+    const double f = x * x * x - 3.0 * x - det, df = 3.0 * x * x - 3.0;
+    if (!(df > 0.0) || f >= 0.0) break;
+    const double next = x - f / df;
+    if (next <= x) break;
+    x = next;
+  }
+  B.diagonal().array() -= x;
+  const Vec3 c01 = B.row(0).cross(B.row(1)), c02 = B.row(0).cross(B.row(2)),
+             c12 = B.row(1).cross(B.row(2));
+  const double n01 = c01.squaredNorm(), n02 = c02.squaredNorm(), n12 = c12.squaredNorm();
+  if (n01 >= n02 && n01 >= n12 && n01 > 0.0) return c01 / std::sqrt(n01);
+  if (n02 >= n12 && n02 > 0.0) return c02 / std::sqrt(n02);
+  if (n12 > 0.0) return c12 / std::sqrt(n12);
+  return Vec3::UnitX();
+}
+
+}  // namespace
 
 std::vector<Vec3> plane_normals(const std::vector<Vec3>& points, const KdTree& tree,
                                 int num_neighbors, Neighborhoods* neighborhoods) {
@@ -23,11 +63,7 @@ std::vector<Vec3> plane_normals(const std::vector<Vec3>& points, const KdTree& t
       const Vec3 d = points[neighbors[j]] - mean;
       scatter.noalias() += d * d.transpose();
     }
-    // Closed-form 3x3 eigen decomposition: several times faster than the iterative one and
-    // accurate enough for a direction (the eigenvalues are replaced anyway).
-    Eigen::SelfAdjointEigenSolver<Mat3> eig;
-    eig.computeDirect(scatter, Eigen::ComputeEigenvectors);
-    normals[i] = eig.eigenvectors().col(0);  // ascending eigenvalues: the normal first
+    normals[i] = smallest_eigenvector(scatter);
   }
   return normals;
 }

@@ -38,8 +38,8 @@ TEST(PlaneCovariances, RefusesTooFewPoints) {
   for (const Mat3& C : plane_covariances(points, tree, 5)) EXPECT_TRUE(C.allFinite());
 }
 
-// The closed-form eigen solver (computeDirect) behind plane_normals gives the same covariances
-// as the iterative solver on real-like neighbourhoods (a curved, noisy car-like surface), and
+// The Newton / cross-product eigen solver behind plane_normals gives the same covariances as
+// Eigen's iterative solver on real-like neighbourhoods (a curved, noisy car-like surface), and
 // plane_covariance(n) is V diag(eps, 1, 1) V^T.
 TEST(PlaneCovariances, ClosedFormSolverMatchesTheIterativeOne) {
   std::mt19937 rng(11);
@@ -70,4 +70,30 @@ TEST(PlaneCovariances, ClosedFormSolverMatchesTheIterativeOne) {
     EXPECT_TRUE(cov[i].isApprox(expected, 1e-5)) << i;
     EXPECT_TRUE(plane_covariance(normals[i]).isApprox(cov[i], 1e-12));
   }
+}
+
+// Degenerate neighbourhoods: points on a line (the two smallest eigenvalues equal) give a unit
+// normal orthogonal to the line; a blob with three nearly equal axes gives the iterative
+// solver's smallest axis.
+TEST(PlaneCovariances, LinesAndNearlyIsotropicNeighbourhoods) {
+  const Vec3 direction = Vec3(1.0, 2.0, -0.5).normalized();
+  std::vector<Vec3> line;
+  for (int i = 0; i < 40; ++i) line.push_back(Vec3(4, -1, 9) + 0.05 * i * direction);
+  const KdTree line_tree(line);
+  for (const Vec3& n : plane_normals(line, line_tree, 10)) {
+    EXPECT_NEAR(n.norm(), 1.0, 1e-9);
+    EXPECT_LT(std::abs(n.dot(direction)), 1e-6);
+  }
+  std::mt19937 rng(2);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<Vec3> blob;
+  for (int i = 0; i < 200; ++i) blob.push_back(Vec3(1.0 * g(rng), 0.97 * g(rng), 0.94 * g(rng)));
+  const KdTree blob_tree(blob);
+  const std::vector<Vec3> normals = plane_normals(blob, blob_tree, 200);  // all points: one axis
+  Mat3 scatter = Mat3::Zero();
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& p : blob) mean += p / 200.0;
+  for (const Vec3& p : blob) scatter += (p - mean) * (p - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Mat3> iterative(scatter);
+  EXPECT_GT(std::abs(normals[0].dot(iterative.eigenvectors().col(0))), 1.0 - 1e-6);
 }
