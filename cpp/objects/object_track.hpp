@@ -73,6 +73,8 @@ struct ObjectTrack {
   bool canonical = false;
   int canonical_frame = -1;        // the frame whose box set it
   bool heading_from_motion = false;  // its front was checked against the direction it moved
+  // its rows before canonical_frame (a cluster's guesses) were re-placed once by the boxes
+  bool birth_placed = false;
 
   bool alive() const { return state != TrackState::kDead; }
   bool ever_confirmed() const { return confirmed_frame >= 0; }

@@ -19,6 +19,34 @@ using detail::median_point;
 using detail::observe;
 using detail::transform;
 
+namespace {
+// box pose priors that hold a window whose first pose is left free: two fix a planar track's
+// position and heading where one box's noise (0.1 m, 2 deg) alone would
+constexpr int kMinBoxesForFreeGauge = 2;
+// a track born this many rows before its boxes keeps its early rows: the one-off window's
+// cost grows with its rows (3 x the 8-frame window: ~1 ms more once per track)
+constexpr int kMaxBirthWindowRows = 24;
+// m, a birth row this far from the boxes' line is a wrong guess (urban s0's parked car: 6.6 m;
+// the boxes' own noise and a few frames' extrapolation stay under 0.5 m)
+constexpr double kBirthOffBoxesM = 1.0;
+
+// Distance of the track's first pose from the line of its first two boxes (their centres'
+// constant velocity carried back to the birth frame); 0 with fewer boxes.
+double birth_off_boxes_m(const objects::ObjectTrack& track) {
+  const objects::TrackFrame* box[2] = {nullptr, nullptr};
+  for (const objects::TrackFrame& row : track.frames) {
+    if (!row.has_detection()) continue;
+    if (!box[0]) box[0] = &row;
+    else if (!box[1]) box[1] = &row;
+  }
+  if (!box[1]) return 0.0;
+  const Vec3 c0 = box[0]->T_w_o_detected.topRightCorner<3, 1>();
+  const Vec3 v = (box[1]->T_w_o_detected.topRightCorner<3, 1>() - c0) / (box[1]->frame - box[0]->frame);
+  const Vec3 predicted = c0 + v * (track.frames[0].frame - box[0]->frame);
+  return (track.frames[0].T_w_o.topRightCorner<3, 1>() - predicted).norm();
+}
+}  // namespace
+
 std::vector<std::pair<int, Vec3>> ObjectTracker::free_instance_points(const Frame& frame,
                                                                       int instance) const {
   std::vector<std::pair<int, Vec3>> out;
@@ -170,9 +198,24 @@ bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id
 void ObjectTracker::refine_window(int c) {
   objects::ObjectTrack& track = tracks_[c];
   objects::ObjectCluster& cluster = clusters_[c];
-  const int rows = std::min<int>(options_.window_frames, static_cast<int>(track.frames.size()));
+  const int num_rows = static_cast<int>(track.frames.size());
+  // once per track: its rows from birth to the first box were a cluster's guesses (a parked
+  // car at 37 m: 4-7 m off in depth). Held fixed as a window's gauge they dragged the next ten
+  // frames with them; one window over the whole track, its first pose free, lets the boxes
+  // place them (e_const carries the motion back), then windows go on from settled rows
+  // only where the birth row is off the boxes' line (box noise 0.1-0.3 m): placing rows by
+  // noisy boxes with a free gauge turned oncoming cars whose guesses were fine
+  int boxes = 0;
+  for (const objects::TrackFrame& row : track.frames) boxes += row.has_detection();
+  const bool place_birth = track.canonical && !track.birth_placed &&
+                           lidar_options_.use_detection_pose &&
+                           track.frames[0].frame < track.canonical_frame &&
+                           boxes >= kMinBoxesForFreeGauge && num_rows <= kMaxBirthWindowRows &&
+                           birth_off_boxes_m(track) > kBirthOffBoxesM;
+  if (track.canonical && boxes >= kMinBoxesForFreeGauge) track.birth_placed = true;
+  const int rows = place_birth ? num_rows : std::min<int>(options_.window_frames, num_rows);
   if (rows < 3) return;
-  const int first = static_cast<int>(track.frames.size()) - rows;
+  const int first = num_rows - rows;
   optim::VisualObjectWindow w;
   for (int r = first; r < first + rows; ++r) {
     const auto cam = T_c_w_of_frame_.find(track.frames[r].frame);
@@ -209,6 +252,7 @@ void ObjectTracker::refine_window(int c) {
     w.has_registration.push_back(next);
     w.reg_sigma.push_back(next ? track.frames[r + 1].reg_sigma : Vec2::Zero());
   }
+  if (place_birth) w.num_fixed_frames = 0;  // the boxes hold the gauge
   optim::VisualObjectWindowOptions wo;
   wo.use_detection_twist = lidar_options_.use_detection_twist;
   wo.det_sigma_translation = lidar_options_.det_sigma_translation;
@@ -237,7 +281,7 @@ void ObjectTracker::refine_window(int c) {
         options_.max_step_m * frames_apart)
       return;
   }
-  for (int r = 1; r < rows; ++r) track.frames[first + r].T_w_o = w.T_w_o[r];
+  for (int r = w.num_fixed_frames; r < rows; ++r) track.frames[first + r].T_w_o = w.T_w_o[r];
   for (int r = 0; r + 1 < rows; ++r)  // eq. 2: the twist linking consecutive poses
     track.frames[first + r].xi = track.Pi * geometry::twist_between(w.T_w_o[r], w.T_w_o[r + 1]);
   cluster.velocity = track.frames[first + rows - 2].xi;

@@ -85,6 +85,7 @@ struct SceneFrame {
   cv::Mat instances;  // CV_32SC1, 0 = none
   cv::Mat flow;       // CV_32FC2, NaN where unknown (filled at the car's keypoints)
   bool mono = false;  // keypoints without a stereo match (the right camera does not see them)
+  double stereo_depth_scale = 1.0;  // stereo depth of every keypoint times this (a disparity bias)
 
   explicit SceneFrame(int index) {
     frame.index = index;
@@ -101,8 +102,9 @@ struct SceneFrame {
     auto& k = frame.keypoints;
     k.uv.push_back(uv);
     k.octave.push_back(octave);
-    k.u_right.push_back(mono ? -1.0 : kCamera.project_right(X_c).x());
-    k.depth.push_back(mono ? -1.0 : X_c.z() + kCamera.t_left.z());
+    const Vec3 X_stereo = stereo_depth_scale * X_c;  // on the same ray, farther or nearer
+    k.u_right.push_back(mono ? -1.0 : kCamera.project_right(X_stereo).x());
+    k.depth.push_back(mono ? -1.0 : X_stereo.z() + kCamera.t_left.z());
     k.descriptors.push_back(d);
     k.label.push_back(label);
     frame.usable.push_back(label == kRoad);
