@@ -16,7 +16,7 @@ namespace {
 constexpr double kCellSizePerRadius = 1.0;
 constexpr double kCellSizeQuantile = 0.75;
 // At most this many cells per point (a far outlier would otherwise blow the grid up); the cell
-// grows instead. Car scans need ~1-3.
+// grows instead. The bench's car scans have 0.1-3.9 cells per point (median 0.5-0.7).
 constexpr std::int64_t kMaxCellsPerPoint = 8;
 // Relative slack on the triangle-inequality reach (float rounding of r + |q - p|).
 constexpr float kReachSlack = 1.0001f;
