@@ -50,14 +50,16 @@ class FakeSystem:
         FakeSystem.instances.append(self)
 
     def track(self, index, timestamp, image_left, image_right, labels, points_c=None,
-              instances=None, flow=None, boxes=None, scores=None, class_ids=None):
+              instances=None, flow=None, boxes=None, scores=None, class_ids=None,
+              open_ends=None):
         self.calls.append(dict(index=index, timestamp=timestamp, shape=image_left.shape,
                                labels=None if labels is None else labels.copy(),
                                points_c=None if points_c is None else points_c.shape,
                                instances=None if instances is None else instances.copy(),
                                flow=None if flow is None else flow.shape,
                                boxes=None if boxes is None else np.array(boxes),
-                               class_ids=None if class_ids is None else np.array(class_ids)))
+                               class_ids=None if class_ids is None else np.array(class_ids),
+                               open_ends=None if open_ends is None else np.array(open_ends)))
         blank = image_left.min() == image_left.max() or image_right.min() == image_right.max()
         if blank:
             status = "lost"
