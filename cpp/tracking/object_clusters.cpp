@@ -202,9 +202,9 @@ void ObjectTracker::refine_window(int c) {
   // once per track: its rows from birth to the first box were a cluster's guesses (a parked
   // car at 37 m: 4-7 m off in depth). Held fixed as a window's gauge they dragged the next ten
   // frames with them; one window over the whole track, its first pose free, lets the boxes
-  // place them (e_const carries the motion back), then windows go on from settled rows
-  // only where the birth row is off the boxes' line (box noise 0.1-0.3 m): placing rows by
-  // noisy boxes with a free gauge turned oncoming cars whose guesses were fine
+  // place them (e_const carries the motion back), then windows go on from settled rows.
+  // Only where the birth row is off the boxes' line (box noise 0.1-0.3 m): placing rows by
+  // noisy boxes with a free gauge turned oncoming cars whose guesses were fine.
   int boxes = 0;
   for (const objects::TrackFrame& row : track.frames) boxes += row.has_detection();
   const bool place_birth = track.canonical && !track.birth_placed &&

@@ -92,3 +92,20 @@ def test_boxes_of_a_wrong_shape_are_refused_at_the_binding():
         tracker.step(0, np.eye(4), np.zeros((2, 6)), np.ones(2), np.full(2, 26), np.ones(2, bool))
     with pytest.raises(ValueError, match="scores, class_ids"):
         tracker.step(0, np.eye(4), np.zeros((2, 7)), np.ones(3), np.full(2, 26), np.ones(2, bool))
+
+
+def test_bad_open_ends_are_refused_at_the_slam_binding():
+    from twistslam.geometry import StereoCamera
+    from twistslam.slam import _new_system
+
+    P2 = np.array([[700.0, 0, 32, 0], [0, 700, 24, 0], [0, 0, 1, 0]])
+    P3 = P2.copy()
+    P3[0, 3] = -700 * 0.54
+    system = _new_system(StereoCamera.from_kitti(P2, P3, 64, 48), {})
+    image = np.zeros((48, 64), np.uint8)
+    boxes = np.array([[0.0, 1.0, 10.0, 4.0, 1.8, 1.5, 0.0]])
+    for open_ends, message in (([2], r"open_ends\[0\]: expected -1, 0 or 1"),
+                               ([0, 1], r"open_ends: expected \(1,\)")):
+        with pytest.raises(ValueError, match=message):
+            system.track(0, 0.0, image, image, None, None, None, None, boxes, np.ones(1),
+                         np.array([26]), np.array(open_ends))
