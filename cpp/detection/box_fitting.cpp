@@ -24,19 +24,37 @@ Extremes extremes(const std::vector<BevPoint>& pts, double c, double s) {
   return e;
 }
 
-// distance of every return to the nearest edge of the enclosing rectangle at (c, s): summed
-// inverse (closeness, floored) and summed plain (for the mean)
-void edge_distances(const std::vector<BevPoint>& pts, double c, double s, const Extremes& e,
-                    double floor_m, double* closeness, double* total) {
-  double inv = 0, sum = 0;
+// Distance of a return at (a, b) (its projections on the two axes) to the nearest edge that
+// faces the sensor. The sensor projects to 0 on both axes: an axis's lo edge faces it if
+// lo > 0, its hi edge if hi < 0, neither if the sensor lies between them (then that axis's
+// edges are seen edge-on or not at all). Returns can only lie on the faces the sensor sees:
+// the far edges are set by the extreme returns themselves (the corner of an L, a lone return
+// through a window) and scoring them rewards any heading that lines two stray returns up.
+double facing_edge_distance(double a, double b, const Extremes& e) {
+  constexpr double kUnseen = std::numeric_limits<double>::infinity();
+  const double d0 = e.lo0 > 0 ? a - e.lo0 : e.hi0 < 0 ? e.hi0 - a : kUnseen;
+  const double d1 = e.lo1 > 0 ? b - e.lo1 : e.hi1 < 0 ? e.hi1 - b : kUnseen;
+  return std::min(d0, d1);
+}
+
+// Closeness of the returns to the sensor-facing edges of their enclosing rectangle at (c, s):
+// sum of 1 / max(distance, floor_m).
+double closeness(const std::vector<BevPoint>& pts, double c, double s, double floor_m) {
+  const Extremes e = extremes(pts, c, s);
+  double sum = 0;
+  for (const BevPoint& p : pts)
+    sum += 1.0 / std::max(facing_edge_distance(p.x * c + p.z * s, -p.x * s + p.z * c, e), floor_m);
+  return sum;
+}
+
+// Mean distance of the returns to the nearest of all four edges (the fit term of the score).
+double mean_edge_distance(const std::vector<BevPoint>& pts, double c, double s, const Extremes& e) {
+  double sum = 0;
   for (const BevPoint& p : pts) {
     const double a = p.x * c + p.z * s, b = -p.x * s + p.z * c;
-    const double d = std::min(std::min(a - e.lo0, e.hi0 - a), std::min(b - e.lo1, e.hi1 - b));
-    inv += 1.0 / std::max(d, floor_m);
-    sum += d;
+    sum += std::min(std::min(a - e.lo0, e.hi0 - a), std::min(b - e.lo1, e.hi1 - b));
   }
-  *closeness = inv;
-  *total = sum;
+  return pts.empty() ? 0.0 : sum / static_cast<double>(pts.size());
 }
 }  // namespace
 
@@ -65,7 +83,7 @@ void BevRectangle::extend_edge(int axis, double size, bool grow_hi) {
   }
 }
 
-BevRectangle fit_rectangle(const std::vector<BevPoint>& points, const DetectorOptions& o) {
+double fit_heading(const std::vector<BevPoint>& points, const DetectorOptions& o) {
   std::vector<BevPoint> sample;
   const std::vector<BevPoint>* pts = &points;
   if (static_cast<int>(points.size()) > o.max_fit_points) {
@@ -74,30 +92,44 @@ BevRectangle fit_rectangle(const std::vector<BevPoint>& points, const DetectorOp
     for (int i = 0; i < o.max_fit_points; ++i) sample.push_back(points[static_cast<std::size_t>(i * stride)]);
     pts = &sample;
   }
+  // the floor follows the spacing of the returns, which grows with range (the azimuth step):
+  // a far face's few returns are no more collinear than that spacing times its curvature
+  double mean_x = 0, mean_z = 0;
+  for (const BevPoint& p : *pts) {
+    mean_x += p.x;
+    mean_z += p.z;
+  }
+  const double range = std::hypot(mean_x, mean_z) / static_cast<double>(std::max<std::size_t>(1, pts->size()));
+  const double floor_m = std::max(o.closeness_floor_m, o.closeness_floor_per_range * range);
   const double step = o.heading_step_deg * M_PI / 180.0;
   const int steps = std::max(1, static_cast<int>(std::ceil(0.5 * M_PI / step - 1e-9)));
   double best_closeness = -1, best_heading = 0;
   for (int k = 0; k < steps; ++k) {
-    const double theta = k * step, c = std::cos(theta), s = std::sin(theta);
-    double closeness = 0, total = 0;
-    edge_distances(*pts, c, s, extremes(*pts, c, s), o.closeness_floor_m, &closeness, &total);
-    if (closeness > best_closeness) {
-      best_closeness = closeness;
+    const double theta = k * step;
+    const double score = closeness(*pts, std::cos(theta), std::sin(theta), floor_m);
+    if (score > best_closeness) {
+      best_closeness = score;
       best_heading = theta;
     }
   }
+  return best_heading;
+}
+
+BevRectangle enclosing_rectangle(const std::vector<BevPoint>& points, double heading) {
   BevRectangle r;
-  r.heading = best_heading;
-  const double c = std::cos(best_heading), s = std::sin(best_heading);
-  const Extremes e = extremes(points, c, s);  // all returns: the subsample may miss a corner
+  r.heading = heading;
+  const double c = std::cos(heading), s = std::sin(heading);
+  const Extremes e = extremes(points, c, s);
   r.lo[0] = e.lo0;
   r.hi[0] = e.hi0;
   r.lo[1] = e.lo1;
   r.hi[1] = e.hi1;
-  double closeness = 0, total = 0;
-  edge_distances(*pts, c, s, e, o.closeness_floor_m, &closeness, &total);
-  r.mean_edge_distance = pts->empty() ? 0.0 : total / static_cast<double>(pts->size());
+  r.mean_edge_distance = mean_edge_distance(points, c, s, e);
   return r;
+}
+
+BevRectangle fit_rectangle(const std::vector<BevPoint>& points, const DetectorOptions& o) {
+  return enclosing_rectangle(points, fit_heading(points, o));
 }
 
 }  // namespace twistslam::detection

@@ -1,8 +1,8 @@
 #pragma once
 // L-shape fitting of a cluster's bird's-eye-view footprint: the heading of the rectangle whose
-// edges the returns hug most closely (closeness criterion: sum over the returns of the inverse
-// distance to the nearest edge, searched over [0, 90) deg), then the enclosing rectangle at
-// that heading. A LiDAR sees one face or two faces (an L) of a car; both give a sharp maximum
+// sensor-facing edges the returns hug most closely (closeness criterion: sum over the returns
+// of the inverse distance to the nearest edge facing the sensor, floored by a distance that
+// grows with range, searched over [0, 90) deg), then the enclosing rectangle at that heading. A LiDAR sees one face or two faces (an L) of a car; both give a sharp maximum
 // at the car's heading, where an enclosing-area criterion is flat for a single face.
 #include <vector>
 
@@ -34,8 +34,14 @@ struct BevRectangle {
   void extend_edge(int axis, double size, bool grow_hi);
 };
 
-// Best rectangle of `points` (at least 1; a regular subsample of max_fit_points is used for
-// larger sets); options must be valid.
+// Heading in [0, pi/2) of the L-shape fit of `points` (at least 1; a regular subsample of
+// max_fit_points is used for larger sets); options must be valid.
+double fit_heading(const std::vector<BevPoint>& points, const DetectorOptions& options);
+
+// The rectangle at `heading` enclosing `points` (at least 1), with their mean edge distance.
+BevRectangle enclosing_rectangle(const std::vector<BevPoint>& points, double heading);
+
+// Best rectangle of `points`: enclosing_rectangle(points, fit_heading(points, options)).
 BevRectangle fit_rectangle(const std::vector<BevPoint>& points, const DetectorOptions& options);
 
 }  // namespace twistslam::detection

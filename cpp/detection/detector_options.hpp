@@ -77,6 +77,13 @@ struct DetectorOptions {
   // 2 deg tilt gives along a car's 1.7 m rear (6 cm): 0.05 m picked 2 deg off on a noiseless
   // rear view, 0.02 m the exact heading; the HDL-64's range noise is ~0.02 m.
   double closeness_floor_m = 0.02;
+  // m of floor per m of range (the cluster's mean): far returns are sparse (the simulator's
+  // 0.2 deg step spaces them 0.14 m at 40 m, the HDL-64's 0.09 deg 0.06 m) and a curved
+  // face's few returns line up with any of several headings within that spacing; the floor
+  // becomes 0.06 m at 40 m. Measured (docs/detection.md): 0.0015 cut the 20-40 m yaw p90
+  // on real KITTI (12.5 -> 9.1 deg) and on the six simulated sequences (5.3 -> 3.4 deg);
+  // 0.0025 worsened the simulated 40-60 m p90 (10 -> 13 deg).
+  double closeness_floor_per_range = 0.0015;
   // returns used by the fit at most (a regular subsample of a larger cluster): a car at
   // 5 m has ~4000; 400 give the same heading within the step at a tenth of the cost.
   int max_fit_points = 400;
@@ -175,6 +182,7 @@ void for_each_option(DetectorOptions& o, Visit&& visit) {
   visit("footprint_max_height_m", o.footprint_max_height_m, 0.0, 20.0);
   visit("heading_step_deg", o.heading_step_deg, 0.1, 45.0);
   visit("closeness_floor_m", o.closeness_floor_m, 0.001, 1.0);
+  visit("closeness_floor_per_range", o.closeness_floor_per_range, 0.0, 0.1);
   visit("max_fit_points", o.max_fit_points, 10, 1000000);
   visit("car_length_m", o.car_length_m, 0.5, 20.0);
   visit("car_width_m", o.car_width_m, 0.3, 5.0);
