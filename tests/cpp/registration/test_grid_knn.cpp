@@ -106,3 +106,24 @@ TEST(GridKnn, CoincidentPointsAndAllPointsAsNeighbours) {
   EXPECT_THROW(all_knn(points, tree, 0, &hood), std::invalid_argument);
   EXPECT_THROW(all_knn(points, tree, 32, &hood), std::invalid_argument);
 }
+
+// The k smallest candidates are selected by branch-free partitions whose first pivot is the
+// previous point's k-th distance: where the density jumps (a dense cluster beside a sparse
+// one, so that guess is far too small or too large) and with many equal distances (a lattice),
+// the selection must still be the KD-tree's.
+TEST(GridKnn, SelectionIsExactWhereTheDensityJumpsAndOnALattice) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec3> points;
+  for (int i = 0; i < 400; ++i) points.push_back(Vec3(u(rng), u(rng), u(rng)) * 0.2);
+  for (int i = 0; i < 200; ++i) points.push_back(Vec3(u(rng), u(rng), u(rng)) * 4.0 + Vec3(0.3, 0, 0));
+  for (int x = 0; x < 8; ++x)
+    for (int y = 0; y < 8; ++y)
+      for (int z = 0; z < 4; ++z) points.push_back(Vec3(x, y, z) * 0.1 + Vec3(-2.0, 0, 0));
+  const KdTree tree(points);
+  for (int k : {3, 8, 20, 45}) {
+    Neighborhoods hood;
+    all_knn(points, tree, k, &hood);
+    expect_same_as_tree(points, tree, k, hood);
+  }
+}
