@@ -31,6 +31,24 @@ inline Mat3 plane_covariance(const Vec3& normal, double plane_epsilon = kPlaneEp
   return Mat3::Identity() - (1.0 - plane_epsilon) * normal * normal.transpose();
 }
 
+// The information (C_n + C_m)^-1 of two plane covariances with unit normals n and m (GICP's
+// combined covariance C_t + R C_s R^T, with m = R n_s), in closed form: C = 2 I - a U U^T with
+// U = [n m], a = 1 - eps, so by Woodbury W = 0.5 I + alpha_sum u u^T + alpha_diff v v^T with
+// u = n + m, v = n - m, alpha_sum = 1 / (8 (eps / a + (1 - c) / 2)), alpha_diff = 1 / (8 (eps /
+// a + (1 + c) / 2)), c = n . m (the eigenvalues of the 2x2 Woodbury core along (1, 1) and
+// (1, -1), written without the cancellation of 1 / a - 1). No 3x3 inverse, and a sum of
+// rank-one terms lets the Gauss-Newton Hessian be accumulated as two 6-vector outer products.
+struct PlanePairInformation {
+  double alpha_sum = 0.0;   // weight of (n + m)(n + m)^T
+  double alpha_diff = 0.0;  // weight of (n - m)(n - m)^T
+};
+inline PlanePairInformation plane_pair_information(double cos_nm,
+                                                   double plane_epsilon = kPlaneEpsilon) {
+  const double floor = plane_epsilon / (1.0 - plane_epsilon);
+  return {1.0 / (8.0 * (floor + 0.5 * (1.0 - cos_nm))),
+          1.0 / (8.0 * (floor + 0.5 * (1.0 + cos_nm)))};
+}
+
 // Covariance of every point (plane_covariance of plane_normals); same arguments and errors.
 std::vector<Mat3> plane_covariances(const std::vector<Vec3>& points, const KdTree& tree,
                                     int num_neighbors, double plane_epsilon = kPlaneEpsilon);

@@ -153,7 +153,8 @@ TEST(Gicp, InvalidOptionsThrow) {
   EXPECT_THROW(validate(o), std::invalid_argument);
 }
 
-// The information (Hessian accumulated by 3x3 blocks in gicp.cpp) equals the dense
+// The information (closed-form W, Hessian accumulated as moments of q plus two rank-one
+// 6x6 terms per correspondence in gicp.cpp) equals the dense
 // sum_i J_i^T W_i J_i, J_i = [-I, hat(q_i)], W_i = (C_t + R C_s R^T)^-1, at T_init (one
 // iteration: the only linearisation is at T_init).
 TEST(Gicp, InformationEqualsTheDenseGaussNewtonHessian) {

@@ -97,3 +97,23 @@ TEST(PlaneCovariances, LinesAndNearlyIsotropicNeighbourhoods) {
   const Eigen::SelfAdjointEigenSolver<Mat3> iterative(scatter);
   EXPECT_GT(std::abs(normals[0].dot(iterative.eigenvectors().col(0))), 1.0 - 1e-6);
 }
+
+// The closed-form information of two plane covariances (Woodbury, rank two) equals the
+// generic 3x3 inverse of their sum, also for nearly parallel and antiparallel normals where
+// it is stiffest (eigenvalue 1 / (2 eps) along the common normal).
+TEST(PlaneCovariances, ClosedFormPairInformationEqualsTheInverse) {
+  std::mt19937 rng(21);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (int trial = 0; trial < 300; ++trial) {
+    const Vec3 n = Vec3(g(rng), g(rng), g(rng)).normalized();
+    Vec3 m = Vec3(g(rng), g(rng), g(rng)).normalized();
+    if (trial % 3 == 1) m = (n + 1e-4 * m).normalized();   // nearly parallel
+    if (trial % 3 == 2) m = (-n + 1e-4 * m).normalized();  // nearly antiparallel
+    const Mat3 expected = (plane_covariance(n) + plane_covariance(m)).inverse();
+    const PlanePairInformation info = plane_pair_information(n.dot(m));
+    const Vec3 u = n + m, v = n - m;
+    const Mat3 W = 0.5 * Mat3::Identity() + info.alpha_sum * u * u.transpose() +
+                   info.alpha_diff * v * v.transpose();
+    EXPECT_TRUE(W.isApprox(expected, 1e-9)) << trial << "\n" << W - expected;
+  }
+}
