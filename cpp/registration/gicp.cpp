@@ -1,5 +1,6 @@
 #include "registration/gicp.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -73,23 +74,43 @@ struct Linearization {
   int num_inliers = 0;
 };
 
+// Slack (m) taken off a clearance: the neighbourhoods are exact up to the grid k-NN's float
+// rounding (~1e-6 m, grid_knn.hpp), so a point that close to the radius may be missing.
+constexpr double kClearanceSlackM = 1e-5;
+
 }  // namespace
 
-Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int hint) {
+// When the neighbourhood certifies the answer, the points within R - rho of q (R the hint's
+// neighbourhood radius, rho its distance to q) are all among its candidates, so the clearance
+// is the smaller of that and the second-nearest candidate's distance.
+Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int hint,
+                         double* clearance_m) {
+  *clearance_m = 0.0;
   const Neighborhoods& nb = scan.neighborhoods;
   if (nb.size == 0) return scan.tree.nearest(q, max_d2, hint);
   for (int hop = 0; hop < kMaxNeighborhoodHops && hint >= 0; ++hop) {
     const double rho2 = (scan.points[hint] - q).squaredNorm();
     const int* candidates = nb.indices.data() + static_cast<std::size_t>(hint) * nb.size;
-    Neighbor best{hint, rho2};
+    // The hint is among its own neighbours (or, with k coincident copies, ties with them).
+    // Branch-free: which candidate is nearer is unpredictable.
+    int best_index = hint;
+    double best2 = std::numeric_limits<double>::infinity(), second2 = best2;
     for (int j = 0; j < nb.size; ++j) {
-      const double d2 = (scan.points[candidates[j]] - q).squaredNorm();
-      if (d2 < best.squared_distance_m2) best = Neighbor{candidates[j], d2};
+      const int c = candidates[j];
+      const double d2 = (scan.points[c] - q).squaredNorm();
+      second2 = std::min(second2, std::max(best2, d2));
+      const bool nearer = d2 < best2;
+      best_index = nearer ? c : best_index;
+      best2 = nearer ? d2 : best2;
     }
+    Neighbor best{best_index, best2};
     // The nearest point is within rho of q, so within 2 rho of the hint: inside the hint's
     // neighbourhood when 2 rho <= its radius.
     if (4.0 * rho2 <= nb.radius2_m2[hint]) {
       if (best.squared_distance_m2 >= max_d2) best.index = -1;
+      *clearance_m = std::max(0.0, std::min(std::sqrt(second2), std::sqrt(nb.radius2_m2[hint]) -
+                                                                    std::sqrt(rho2)) -
+                                       kClearanceSlackM);
       return best;
     }
     if (best.index == hint) break;
@@ -98,12 +119,27 @@ Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int
   return scan.tree.nearest(q, max_d2, hint);
 }
 
+Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int hint) {
+  double clearance_m;
+  return nearest_in_scan(scan, q, max_d2, hint, &clearance_m);
+}
+
 namespace {
 
-// `neighbor_of` holds each source point's target neighbour of the previous iteration (-1 =
-// none) and is updated: it seeds the next search, which mostly ends right there.
+// A source point's correspondence at the last search: the target neighbour (-1 = none), where
+// the point was then (target frame) and a lower bound on its distance to every other target
+// point (0 = unknown). While the point has moved by delta < clearance - |q - neighbour| since,
+// the neighbour is still the nearest (triangle inequality) and is kept without a search.
+struct Correspondence {
+  int neighbor = -1;
+  double clearance_m = 0.0;
+  Vec3 searched_at = Vec3::Zero();
+};
+
+// `previous` holds each source point's last correspondence and is updated: it is kept when
+// certified (above), else it seeds the next search, which mostly ends right there.
 Linearization linearize(const GicpScan& source, const GicpScan& target, const Mat4& T,
-                        const GicpOptions& o, std::vector<int>* neighbor_of) {
+                        const GicpOptions& o, std::vector<Correspondence>* previous) {
   Linearization lin;
   const Mat3 R = T.topLeftCorner<3, 3>();
   const Vec3 t = T.topRightCorner<3, 1>();
@@ -125,9 +161,24 @@ Linearization linearize(const GicpScan& source, const GicpScan& target, const Ma
   int last_found = -1;
   for (const int i : source.tree.leaf_order()) {
     const Vec3 q = R * source.points[i] + t;
-    const int hint = (*neighbor_of)[i] >= 0 ? (*neighbor_of)[i] : last_found;
-    const Neighbor nn = nearest_in_scan(target, q, max_d2, hint);
-    (*neighbor_of)[i] = nn.index;
+    Correspondence& c = (*previous)[i];
+    Neighbor nn{-1, 0.0};
+    bool kept = false;
+    if (c.neighbor >= 0 && c.clearance_m > 0.0) {
+      const double moved = (q - c.searched_at).norm();
+      const double reach = c.clearance_m - moved;
+      const double d2 = (target.points[c.neighbor] - q).squaredNorm();
+      if (reach > 0.0 && d2 < reach * reach) {
+        kept = true;
+        nn = Neighbor{d2 < max_d2 ? c.neighbor : -1, d2};
+      }
+    }
+    if (!kept) {
+      const int hint = c.neighbor >= 0 ? c.neighbor : last_found;
+      nn = nearest_in_scan(target, q, max_d2, hint, &c.clearance_m);
+      c.searched_at = q;
+    }
+    c.neighbor = nn.index;
     if (nn.index < 0) continue;
     last_found = nn.index;
     const Vec3 e = target.points[nn.index] - q;
@@ -193,7 +244,7 @@ GicpResult gicp(const GicpScan& source, const GicpScan& target, const Mat4& T_in
   // those directions get a zero update.
   const Mat6 locked = Mat6::Identity() - Pi;
   Mat4 T = T_init;
-  std::vector<int> neighbor_of(source.points.size(), -1);
+  std::vector<Correspondence> correspondences(source.points.size());
   result.status = GicpStatus::kMaxIterations;
   // Backtracking: nearest-neighbour correspondences change between iterations, and on real
   // scans plain Gauss-Newton can then cycle between two estimates ~1 mm apart (measured on
@@ -209,7 +260,7 @@ GicpResult gicp(const GicpScan& source, const GicpScan& target, const Mat4& T_in
   };
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
     result.iterations = iteration;
-    const Linearization lin = linearize(source, target, T, options, &neighbor_of);
+    const Linearization lin = linearize(source, target, T, options, &correspondences);
     if (lin.num_inliers < options.min_correspondences) {
       result.num_inliers = lin.num_inliers;
       result.status = GicpStatus::kTooFewCorrespondences;

@@ -40,6 +40,13 @@ GicpScan make_gicp_scan(const Eigen::Ref<const Points3>& points, int num_neighbo
 // that neighbourhood becomes the hint (at most kMaxNeighborhoodHops tries), then the tree.
 Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int hint);
 
+// Same, and in *clearance_m a lower bound (m) on the distance from q to every other point of
+// the scan (0 when unknown: after a tree search). GICP keeps a correspondence without a search
+// while the source point has moved by less than clearance - |q - neighbour| (the neighbour is
+// then still the nearest).
+Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int hint,
+                         double* clearance_m);
+
 // Neighbourhood tries before the tree search. 2: on the bench's pairs 55-74 % of all GICP
 // correspondence searches (64-87 % of those with a previous neighbour) end in a neighbourhood,
 // the second try adding 7-8 points; it cut the alignment's time by a further 5-8 % on the

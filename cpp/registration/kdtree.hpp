@@ -45,7 +45,8 @@ class KdTree {
     int first = 0;   // inner: left child; leaf: begin
     int second = 0;  // inner: right child; leaf: end
   };
-  int build(const std::vector<Vec3>& points, int begin, int end);
+  // `keys`: scratch for the split coordinates, points.size() long.
+  int build(const std::vector<Vec3>& points, int begin, int end, double* keys);
   struct KnnState {
     Neighbor* best;  // k slots, the first `count` filled, nearest first
     int k;

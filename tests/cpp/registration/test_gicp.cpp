@@ -239,3 +239,30 @@ TEST(Gicp, NeighbourhoodSearchEqualsTheTree) {
   EXPECT_GT(by_neighbourhood, 300);  // both paths exercised
   EXPECT_GT(out_of_range, 30);
 }
+
+// The clearance that lets GICP keep a correspondence without searching again is a true lower
+// bound: no other scan point is closer to q than it (brute force), and it is positive for
+// most queries near the scan (so the kept path is exercised).
+TEST(Gicp, CorrespondenceClearanceIsALowerBoundOnTheOtherPoints) {
+  const GicpScan scan = make_gicp_scan(test::car_scan(kCarCentre, 1500, 0.01, 17), 20);
+  std::mt19937 rng(18);
+  std::normal_distribution<double> offset(0.0, 0.03);
+  std::uniform_int_distribution<int> any(0, static_cast<int>(scan.points.size()) - 1);
+  int positive = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const int near = any(rng);
+    const Vec3 q = scan.points[near] + Vec3(offset(rng), offset(rng), offset(rng));
+    double clearance = -1.0;
+    const Neighbor nn = nearest_in_scan(scan, q, 1.0, trial % 2 == 0 ? near : any(rng),
+                                        &clearance);
+    ASSERT_GE(nn.index, 0);
+    ASSERT_GE(clearance, 0.0);
+    double second = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < scan.points.size(); ++j)
+      if (static_cast<int>(j) != nn.index) second = std::min(second, (scan.points[j] - q).norm());
+    EXPECT_LE(clearance, second) << trial;
+    EXPECT_LE(std::sqrt(nn.squared_distance_m2), second + 1e-12) << trial;
+    positive += clearance > 0.0;
+  }
+  EXPECT_GT(positive, 1000);
+}

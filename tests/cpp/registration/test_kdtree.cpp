@@ -75,3 +75,29 @@ TEST(KdTree, NearestWithinRadiusEqualsBruteForce) {
   EXPECT_GT(found_some, 0);  // both branches exercised
   EXPECT_GT(found_none, 0);
 }
+
+// The median split's branch-free selection must cope with repeated coordinates (a lattice,
+// runs of equal values along the split axis) and fully coincident points: every point kept
+// once, and k-NN still equal to brute force.
+TEST(KdTree, RepeatedCoordinatesAndCoincidentPointsStillGiveExactKnn) {
+  std::vector<Vec3> points;
+  for (int x = 0; x < 9; ++x)
+    for (int y = 0; y < 5; ++y)
+      for (int z = 0; z < 7; ++z) points.push_back(Vec3(0.1 * x, 0.1 * y, 0.1 * z));
+  for (int i = 0; i < 40; ++i) points.push_back(Vec3(0.3, 0.2, 0.1));  // coincident
+  const KdTree tree(points);
+  std::vector<int> order = tree.leaf_order();
+  std::sort(order.begin(), order.end());
+  for (std::size_t i = 0; i < order.size(); ++i) ASSERT_EQ(order[i], static_cast<int>(i));
+  const std::vector<Vec3> queries = random_points(100, 7);
+  for (int k : {1, 8, 50}) {
+    for (const Vec3& q0 : queries) {
+      const Vec3 q = 0.15 * q0 + Vec3(0.4, 0.2, 0.3);
+      const std::vector<Neighbor> found = tree.knn(q, k);
+      const std::vector<double> expected = brute_force_distances(points, q, k);
+      ASSERT_EQ(found.size(), expected.size());
+      for (std::size_t i = 0; i < found.size(); ++i)
+        EXPECT_DOUBLE_EQ(found[i].squared_distance_m2, expected[i]);
+    }
+  }
+}
