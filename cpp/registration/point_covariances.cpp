@@ -57,14 +57,25 @@ std::vector<Vec3> plane_normals(const std::vector<Vec3>& points, const KdTree& t
   all_knn(points, tree, num_neighbors, nb);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const int* neighbors = nb->indices.data() + i * num_neighbors;
-    Vec3 mean = Vec3::Zero();
-    for (int j = 0; j < num_neighbors; ++j) mean += points[neighbors[j]];
-    mean /= static_cast<double>(num_neighbors);
-    Mat3 scatter = Mat3::Zero();
+    // One pass over the neighbours, relative to the point itself (their spread is a few cm, so
+    // no precision is lost): scatter = sum d d^T - (sum d)(sum d)^T / k, upper triangle.
+    const Vec3& centre = points[i];
+    double sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
     for (int j = 0; j < num_neighbors; ++j) {
-      const Vec3 d = points[neighbors[j]] - mean;
-      scatter.noalias() += d * d.transpose();
+      const Vec3& p = points[neighbors[j]];
+      const double dx = p[0] - centre[0], dy = p[1] - centre[1], dz = p[2] - centre[2];
+      sx += dx, sy += dy, sz += dz;
+      sxx += dx * dx, sxy += dx * dy, sxz += dx * dz;
+      syy += dy * dy, syz += dy * dz, szz += dz * dz;
     }
+    const double inv_k = 1.0 / num_neighbors;
+    Mat3 scatter;
+    scatter(0, 0) = sxx - sx * sx * inv_k;
+    scatter(1, 1) = syy - sy * sy * inv_k;
+    scatter(2, 2) = szz - sz * sz * inv_k;
+    scatter(0, 1) = scatter(1, 0) = sxy - sx * sy * inv_k;
+    scatter(0, 2) = scatter(2, 0) = sxz - sx * sz * inv_k;
+    scatter(1, 2) = scatter(2, 1) = syz - sy * sz * inv_k;
     normals[i] = smallest_eigenvector(scatter);
   }
   return normals;
