@@ -1,5 +1,6 @@
 #include "objects/association.hpp"
 
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -64,6 +65,13 @@ Mat4 turned_around(const Mat4& T_w_o) {
 
 bool heading_flipped(const Mat4& T_w_detected, const Mat4& T_w_reference) {
   return T_w_detected.block<3, 1>(0, 0).dot(T_w_reference.block<3, 1>(0, 0)) < 0.0;
+}
+
+bool quarter_turned(const Mat4& T_w_detected, const Mat4& T_w_reference) {
+  // x (length) and z (width) of a box frame span its ground plane (y is down)
+  const double along = T_w_detected.block<3, 1>(0, 0).dot(T_w_reference.block<3, 1>(0, 0));
+  const double across = T_w_detected.block<3, 1>(0, 0).dot(T_w_reference.block<3, 1>(0, 2));
+  return std::abs(across) > std::abs(along);
 }
 
 }  // namespace twistslam::objects

@@ -34,4 +34,9 @@ Mat4 turned_around(const Mat4& T_w_o);
 // heading differs by more than 90 degrees, so it is the same box seen with a flipped yaw.
 bool heading_flipped(const Mat4& T_w_detected, const Mat4& T_w_reference);
 
+// True when the detection's length axis lies closer to the reference's width axis than to
+// its length axis (more than 45 degrees apart modulo pi): the box was fitted a quarter turn
+// off, e.g. a partly hidden L-shape read as a car's rear.
+bool quarter_turned(const Mat4& T_w_detected, const Mat4& T_w_reference);
+
 }  // namespace twistslam::objects

@@ -28,6 +28,13 @@ double distance_to_box(const geometry::Box3D& box, const Vec3& p_c) {
   return (p_b - p_b.cwiseMax(-half).cwiseMin(half)).norm();
 }
 
+// Whether any of the track's boxes measured its length (the others took the detector's prior).
+bool has_measured_box(const objects::ObjectTrack& track) {
+  for (const objects::TrackFrame& row : track.frames)
+    if (row.has_detection() && row.open_end_w.isZero()) return true;
+  return false;
+}
+
 }  // namespace
 
 std::vector<int> ObjectTracker::associate_detections(const Frame& frame,
@@ -76,8 +83,26 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
     const Mat4* reference = track.canonical ? &row.T_w_o : nullptr;
     for (int r = static_cast<int>(track.frames.size()) - 2; r >= 0 && !reference; --r)
       if (track.frames[r].has_detection()) reference = &track.frames[r].T_w_o_detected;
-    if (reference && objects::heading_flipped(T_w_box, *reference))
+    const bool across = reference && objects::quarter_turned(T_w_box, *reference);
+    if (across && det.open_end != 0) {
+      // a box whose length is the detector's prior, a quarter turn off the track's axis: a
+      // partly hidden L-shape read as a car's rear (the detector's 90 deg flips are all such
+      // boxes, docs/detection.md). The car is there, but neither its axis nor its centre is:
+      // the box keeps the track alive and claims the car, it places nothing.
+      row.score = row.confidence = det.score;
+      row.range = det.box.center.norm();
+      return;
+    }
+    if (across && track.canonical && !has_measured_box(track)) {
+      // a measured length a quarter turn off a frame that only prior-length boxes set: the
+      // measured box decides the axis; the earlier boxes were the quarter-turned ones
+      for (objects::TrackFrame& earlier : track.frames) earlier.detection_index = -1;
+      make_canonical(c, T_w_box);
+      track.canonical_frame = row.frame;
+      track.heading_from_motion = false;
+    } else if (reference && objects::heading_flipped(T_w_box, *reference)) {
       T_w_box = objects::turned_around(T_w_box);
+    }
   }
   row.T_w_o_detected = T_w_box;
   row.detected_size = Vec3(det.box.length, det.box.width, det.box.height);

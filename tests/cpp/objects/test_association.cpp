@@ -155,3 +155,16 @@ TEST(Association, HeadingFlippedBeyondNinetyDegrees) {
   EXPECT_TRUE(heading_flipped(turned_around(ref), ref));
   EXPECT_FALSE(heading_flipped(turned_around(turned_around(ref)), ref));
 }
+
+TEST(Association, QuarterTurnedBeyondFortyFiveDegreesModuloPi) {
+  const Vec3 p(1, 1, 20);
+  const Mat4 ref = scenes::pose_yaw(0.4, p);
+  const double deg = M_PI / 180;
+  for (double d : {0.0, 30 * deg, -44 * deg, M_PI, 150 * deg, -170 * deg})
+    EXPECT_FALSE(quarter_turned(scenes::pose_yaw(0.4 + d, p), ref)) << d / deg;
+  for (double d : {90 * deg, -90 * deg, 46 * deg, -60 * deg, 120 * deg, -134 * deg})
+    EXPECT_TRUE(quarter_turned(scenes::pose_yaw(0.4 + d, p), ref)) << d / deg;
+  // The translation plays no part; a turned-around box is not quarter-turned.
+  EXPECT_FALSE(quarter_turned(scenes::pose_yaw(0.4, Vec3(50, 0, -3)), ref));
+  EXPECT_FALSE(quarter_turned(turned_around(ref), ref));
+}
