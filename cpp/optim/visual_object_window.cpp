@@ -1,9 +1,25 @@
 #include "optim/visual_object_window.hpp"
 
+#include <algorithm>
+
 #include "geometry/se3.hpp"
 #include "optim/problem_builder.hpp"
 
 namespace twistslam::optim {
+
+namespace {
+
+// e_const's rotation sigma at window row i (the triple i-1, i, i+1): see the options
+double const_rotation_sigma(const VisualObjectWindow& w, int i, const VisualObjectWindowOptions& o) {
+  if (!(o.const_rotation_reference_step_m > 0)) return o.const_sigma_rotation;
+  const double step_m = 0.5 * (w.T_w_o[i + 1].topRightCorner<3, 1>() -
+                               w.T_w_o[i - 1].topRightCorner<3, 1>()).norm();
+  const double fraction = std::clamp(step_m / o.const_rotation_reference_step_m,
+                                     o.const_rotation_min_fraction, 1.0);
+  return o.const_sigma_rotation * fraction;
+}
+
+}  // namespace
 
 VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCamera& camera,
                                                       VisualObjectWindow& w, const Mat6& Pi,
@@ -50,7 +66,8 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
                     o.lateral_sigma, o.huber_heading);
     if (o.use_const && i >= 1 && i + 1 >= w.num_fixed_frames)
       b.add_constant_velocity(object_block[i - 1], object_block[i], object_block[i + 1], Pi,
-                              o.const_sigma_translation, o.const_sigma_rotation, o.huber_const);
+                              o.const_sigma_translation, const_rotation_sigma(w, i, o),
+                              o.huber_const);
   }
   // LiDAR terms, in the local frame: a world twist seen from S is Ad_S xi, so the measured
   // poses and motions are moved by S as the blocks are

@@ -53,6 +53,12 @@ struct VisualObjectWindowOptions {
   double huber_mono = 2.448;             // px, sqrt(chi2 2 dof 95 %)
   double const_sigma_translation = 0.05; // m/frame, change of the translational twist
   double const_sigma_rotation = 0.005;   // rad/frame, change of the rotational twist
+  // > 0: below this step per frame (m, from the window's initial positions) the rotation
+  // sigma shrinks in proportion to the step, to const_rotation_min_fraction of it at rest:
+  // a vehicle's yaw rate is speed x curvature, and curvature changes along the path, so a
+  // crawling car's yaw rate hardly changes from frame to frame. 0: one sigma for every speed
+  double const_rotation_reference_step_m = 0;
+  double const_rotation_min_fraction = 0.1;
   double link_sigma_translation = 0.01;  // m/frame, out-of-link motion allowed
   // rad/frame: 0.002 left 0.06-0.26 deg/m of roll / pitch in the object RPE_r; with 0.001
   // crowded seeds 0-2 went 0.34/0.35/0.37 -> 0.28/0.32/0.34 deg/m, urban 0.41/0.12/0.34 ->

@@ -270,6 +270,8 @@ void ObjectTracker::refine_window(int c) {
   wo.use_const = options_.use_const;
   wo.const_sigma_translation = options_.const_sigma_translation;
   wo.const_sigma_rotation = options_.const_sigma_rotation;
+  wo.const_rotation_reference_step_m = options_.const_rotation_reference_step_m;
+  wo.const_rotation_min_fraction = options_.const_rotation_min_fraction;
   wo.max_iterations = options_.window_iterations;
   if (!optim::refine_visual_object_window(camera_, w, track.Pi, wo).usable) return;
   // an under-constrained window (few points, no e_const) can throw poses kilometres away;

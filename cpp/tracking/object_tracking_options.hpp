@@ -51,6 +51,8 @@ struct ObjectTrackingOptions {
   bool use_const = true;            // e_const in the window
   double const_sigma_translation = 0.05;  // m/frame, change of the translational twist
   double const_sigma_rotation = 0.005;    // rad/frame, change of the rotational twist
+  double const_rotation_reference_step_m = 1.0;  // m/frame; slower: rotation sigma shrinks (0: off)
+  double const_rotation_min_fraction = 0.1;      // of const_sigma_rotation, at rest
   int window_iterations = 5;        // Ceres iterations of the window
   double recenter_distance_m = 0.5; // origin moved to the points' median beyond this (0: never)
   // non-holonomic prior in the window (optim/heading_cost.hpp), planar-link classes
@@ -110,6 +112,8 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("use_const", o.use_const, 0, 1);
   visit("const_sigma_translation", o.const_sigma_translation, 1e-6, 100.0);
   visit("const_sigma_rotation", o.const_sigma_rotation, 1e-6, 10.0);
+  visit("const_rotation_reference_step_m", o.const_rotation_reference_step_m, 0.0, 100.0);
+  visit("const_rotation_min_fraction", o.const_rotation_min_fraction, 1e-3, 1.0);
   visit("window_iterations", o.window_iterations, 1, 1000);
   visit("recenter_distance_m", o.recenter_distance_m, 0.0, 1000.0);
   visit("nonholonomic", o.nonholonomic, 0, 1);

@@ -133,6 +133,13 @@ class VisualObjectsConfig:
         0.05, "change of the translational twist between frames: 0.5 m/s^2 at 10 Hz", "m/frame")
     const_sigma_rotation: float = param(
         0.005, "change of the rotational twist between frames (0.3 deg/frame)", "rad/frame")
+    const_rotation_reference_step_m: float = param(
+        1.0, "below this step per frame the rotation sigma of e_const shrinks in proportion "
+        "(a vehicle's yaw rate is speed x curvature and curvature changes along the path: a "
+        "crawling car's yaw rate hardly changes); 0: one sigma at every speed", "m/frame")
+    const_rotation_min_fraction: float = param(
+        0.1, "the shrunk sigma's floor, as a fraction of const_sigma_rotation (a car at rest)",
+        "fraction")
     window_iterations: int = param(5, "Ceres iterations of the window (from a close start)")
     recenter_distance_m: float = param(
         0.5, "the object frame's origin moves to the median of the cluster's confirmed points "

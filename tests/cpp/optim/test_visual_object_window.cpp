@@ -141,3 +141,81 @@ TEST(HeadingCost, LateralStepInSigmasAndBlindToTranslations) {
 }
 
 }  // namespace
+
+namespace {
+
+// A car driving along its x axis at step_m per frame with a constant yaw rate, seen only
+// through registered motions (e_reg) whose yaw is off by +-noise_deg (seeded): the window
+// starts at the truth and must keep the measured yaw noise out of its per-step rotations.
+struct RegisteredTrack {
+  std::vector<Mat4> T_w_o_true;
+  VisualObjectWindow window;
+};
+
+RegisteredTrack registered_track(int frames, double step_m, double yaw_rate_deg,
+                                 double noise_deg, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, noise_deg * kDeg);
+  RegisteredTrack s;
+  Mat4 T = Mat4::Identity();
+  T(2, 3) = 20;
+  for (int f = 0; f < frames; ++f) {
+    s.T_w_o_true.push_back(T);
+    s.window.T_c_w.push_back(Mat4::Identity());
+    s.window.T_w_o.push_back(T);
+    Mat4 step = yaw(yaw_rate_deg * kDeg);
+    step(0, 3) = step_m;
+    T = T * step;  // body-frame motion: forward along x, then the turn
+  }
+  for (int f = 0; f < frames; ++f) {
+    const bool next = f + 1 < frames;
+    // the measured motion M_w = T(f+1) T(f)^-1 with a yaw error at the object's centre
+    s.window.M_w_reg.push_back(next ? Mat4(s.T_w_o_true[f + 1] * yaw(noise(rng)) *
+                                           geometry::se3_inverse(s.T_w_o_true[f]))
+                                    : Mat4::Identity());
+    s.window.has_registration.push_back(next);
+  }
+  s.window.num_fixed_frames = 1;
+  s.window.up_w = kUp;
+  return s;
+}
+
+// The estimated steps' yaw errors (deg, signed about the road normal), and how much they
+// change from one step to the next (summed): the jitter e_const is there to hold down.
+double step_yaw_jitter_deg(const RegisteredTrack& s) {
+  std::vector<double> errors;
+  for (size_t f = 0; f + 1 < s.T_w_o_true.size(); ++f) {
+    const Mat4 truth = geometry::se3_inverse(s.T_w_o_true[f]) * s.T_w_o_true[f + 1];
+    const Mat4 estimate = geometry::se3_inverse(s.window.T_w_o[f]) * s.window.T_w_o[f + 1];
+    const Eigen::AngleAxisd dR(truth.topLeftCorner<3, 3>().transpose() * estimate.topLeftCorner<3, 3>());
+    errors.push_back(dR.angle() * dR.axis().dot(kUp) / kDeg);
+  }
+  double jitter = 0;
+  for (size_t k = 1; k < errors.size(); ++k) jitter += std::abs(errors[k] - errors[k - 1]);
+  return jitter;
+}
+
+}  // namespace
+
+TEST(VisualObjectWindow, ACrawlingCarsYawRateIsHeldSteadierThanAFastCars) {
+  const Mat6 Pi = geometry::projector_planar(kUp);
+  VisualObjectWindowOptions fixed;  // one e_const rotation sigma at every speed
+  fixed.reg_sigma_rotation = 0.2 * kDeg;
+  VisualObjectWindowOptions scaled = fixed;
+  scaled.const_rotation_reference_step_m = 1.0;
+  scaled.const_rotation_min_fraction = 0.1;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    // 0.15 m/frame (a queue crawling at 5 km/h), straight: scaled sigma 0.15 x the fixed one
+    RegisteredTrack a = registered_track(10, 0.15, 0.0, 0.2, seed), b = a;
+    ASSERT_TRUE(refine_visual_object_window(test_scenes::kitti_camera(), a.window, Pi, fixed).usable);
+    ASSERT_TRUE(refine_visual_object_window(test_scenes::kitti_camera(), b.window, Pi, scaled).usable);
+    // (measured, seeds 1-3: jitter 0.44-1.08 deg fixed, 0.03-0.06 scaled)
+    EXPECT_LT(step_yaw_jitter_deg(b), 0.3 * step_yaw_jitter_deg(a)) << "seed " << seed;
+    // 1.2 m/frame through a bend: at and above the reference step nothing changes
+    RegisteredTrack c = registered_track(10, 1.2, 3.0, 0.2, seed), d = c;
+    ASSERT_TRUE(refine_visual_object_window(test_scenes::kitti_camera(), c.window, Pi, fixed).usable);
+    ASSERT_TRUE(refine_visual_object_window(test_scenes::kitti_camera(), d.window, Pi, scaled).usable);
+    for (size_t f = 0; f < c.window.T_w_o.size(); ++f)
+      EXPECT_TRUE(c.window.T_w_o[f].isApprox(d.window.T_w_o[f], 1e-12)) << "frame " << f;
+  }
+}
