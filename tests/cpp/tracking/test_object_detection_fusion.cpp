@@ -80,7 +80,6 @@ struct Boxes {
   // frames from quarter_from to quarter_to (excluded): the box is a quarter turn off, its
   // length the detector's prior (open_end set), as a partly hidden L-shape read as a rear
   int quarter_from = -1, quarter_to = -1;
-  int first_open_end = 0;            // the first box's open_end (its length the prior's)
 };
 
 void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Background& background,
@@ -100,7 +99,6 @@ void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Back
                                                (first ? boxes.first_yaw : 0),
                               boxes.offset + noise + (first ? boxes.first_offset : Vec3::Zero()),
                               boxes.class_id));
-      if (first) dets.back().open_end = boxes.first_open_end;
       if (i >= boxes.quarter_from && i < boxes.quarter_to) {
         dets.back().box.yaw += M_PI / 2;
         dets.back().open_end = 1;
@@ -136,6 +134,14 @@ void expect_canonical(const objects::ObjectTrack& track, const objects::ObjectCl
 struct DetectionFusion : ::testing::Test {
   std::mt19937 rng{4321};
   Background background = make_background(rng);
+
+  // A default tracker run over `frames` frames of the car with these boxes.
+  tracking::ObjectTracker track_one_car(const Car& car, const Boxes& boxes, int frames) {
+    auto tracker = make_tracker();
+    std::vector<tracking::ObjectTrackingReport> reports;
+    run_with_boxes(tracker, car, background, frames, boxes, rng, &reports);
+    return tracker;
+  }
 };
 
 TEST_F(DetectionFusion, FirstBoxSetsTheCanonicalFrameAndTheBoxesTheSize) {
@@ -209,9 +215,7 @@ TEST_F(DetectionFusion, QuarterTurnedPriorLengthBoxesPlaceNothing) {
   Boxes boxes;
   boxes.quarter_from = 3;
   boxes.quarter_to = 9;
-  auto tracker = make_tracker();
-  std::vector<tracking::ObjectTrackingReport> reports;
-  run_with_boxes(tracker, car, background, 14, boxes, rng, &reports);
+  const tracking::ObjectTracker tracker = track_one_car(car, boxes, 14);
   ASSERT_EQ(tracker.tracks().size(), 1u);
   const objects::ObjectTrack& track = tracker.tracks()[0];
   for (const objects::TrackFrame& row : track.frames) {
@@ -231,9 +235,7 @@ TEST_F(DetectionFusion, AMeasuredBoxTurnsAFrameThatOnlyPriorLengthBoxesSet) {
   Boxes boxes;
   boxes.quarter_from = 0;
   boxes.quarter_to = 1;
-  auto tracker = make_tracker();
-  std::vector<tracking::ObjectTrackingReport> reports;
-  run_with_boxes(tracker, car, background, 12, boxes, rng, &reports);
+  const tracking::ObjectTracker tracker = track_one_car(car, boxes, 12);
   ASSERT_EQ(tracker.tracks().size(), 1u);
   const objects::ObjectTrack& track = tracker.tracks()[0];
   EXPECT_FALSE(track.frames.front().has_detection());
