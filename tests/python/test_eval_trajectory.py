@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from twistslam import geometry
 from twistslam.eval.camera import evaluate_camera
-from twistslam.eval.object_poses import box_poses, track_pose_errors, world_poses
+from twistslam.eval.object_poses import MIN_RPE_PATH_M, box_poses, track_pose_errors, world_poses
 from twistslam.eval.trajectory import umeyama_alignment
 
 
@@ -190,6 +190,26 @@ def test_parked_object_has_no_rpe_per_metre():
     P = box_poses(boxes)
     r = track_pose_errors(np.arange(5), P, np.arange(5), P)
     assert r.ate == 0.0 and np.isnan(r.rpe_t) and np.isnan(r.rpe_r)
+
+
+@pytest.mark.parametrize("step_m, has_rpe", [(0.02, False), (0.2, True)])
+def test_crawling_object_below_the_minimum_path_has_no_rpe_per_metre(step_m, has_rpe):
+    """A car waiting at a light (2 cm/frame over 30 frames: 0.6 m) with 1 cm label noise
+    has no RPE per metre (it would read ~0.9 m/m); the same car at 0.2 m/frame (6 m) has."""
+    n = 31
+    boxes = np.tile([1.0, 1.0, 10.0, 4.0, 1.7, 1.5, 0.0], (n, 1))
+    boxes[:, 2] += step_m * np.arange(n)
+    noisy = boxes.copy()
+    noisy[:, 0] += np.random.default_rng(3).normal(0.0, 0.01, n)
+    r = track_pose_errors(np.arange(n), box_poses(boxes), np.arange(n), box_poses(noisy))
+    assert r.length == pytest.approx(step_m * (n - 1))
+    assert r.ate > 0.005
+    if has_rpe:
+        assert r.length >= MIN_RPE_PATH_M and 0.0 < r.rpe_t < 0.1 and np.isfinite(r.rpe_r)
+    else:
+        assert r.length < MIN_RPE_PATH_M and np.isnan(r.rpe_t) and np.isnan(r.rpe_r)
+        assert track_pose_errors(np.arange(n), box_poses(boxes), np.arange(n), box_poses(noisy),
+                                 min_path_m=0.0).rpe_t > 0.3  # what the table used to print
 
 
 def test_box_pose_matches_geometry_corners():

@@ -34,7 +34,7 @@ from .object_ground_truth import (  # noqa: F401  (re-exported: callers import t
     CAR_CLASS, MAX_OCCLUSION, MAX_RANGE_M, MAX_TRUNCATION, MIN_BOX_HEIGHT_PX, MIN_VISIBLE_FRAMES, GtTrack,
     SequenceGroundTruth, evaluated_cars, load_ground_truth, selected_frames,
 )
-from .object_poses import track_pose_errors
+from .object_poses import MIN_RPE_PATH_M, track_pose_errors  # noqa: F401  (re-exported)
 from .object_yaw import mean_yaw_error_deg
 from .trajectory import invert, rotation_angle
 
@@ -47,9 +47,6 @@ GHOST_MIN_FRAMES = 5
 GHOST_MISS_FRACTION = 0.5
 #: a car counts as tracked when covered in at least this fraction of its frames (issue: 90 %)
 TRACKED_COVERAGE = 0.9
-#: RPE per metre needs this much ground-truth travel (m) over the compared frames: a "moving"
-#: car waiting at a light would divide centimetres of noise by millimetres (NaN instead)
-MIN_RPE_PATH_M = 5.0
 #: offset samples farther than this from the first mean (m, deg) are left out of the second
 OFFSET_INLIER_M = 0.5
 OFFSET_INLIER_DEG = 10.0
@@ -231,12 +228,10 @@ def _car_row(gt: SequenceGroundTruth, car: GtTrack, frames: np.ndarray,
         offset = estimate_offset(T_c_w @ gt_poses, T_c_w @ poses[ei])
         aligned = track_pose_errors(common, gt_poses, common, raw[ei] @ invert(offset))
         canonical = track_pose_errors(common, gt_poses, common, raw[ei])
-        per_m = aligned.length >= MIN_RPE_PATH_M
         values.update(n_compared=len(common), path_m=aligned.length,
-                      rpe_t=aligned.rpe_t if per_m else nan, rpe_r=aligned.rpe_r if per_m else nan,
+                      rpe_t=aligned.rpe_t, rpe_r=aligned.rpe_r,
                       ate_aligned=aligned.ate_aligned, ate_canonical=canonical.ate,
-                      rpe_t_canonical=canonical.rpe_t if per_m else nan,
-                      rpe_r_canonical=canonical.rpe_r if per_m else nan, offset=offset)
+                      rpe_t_canonical=canonical.rpe_t, rpe_r_canonical=canonical.rpe_r, offset=offset)
         if canonical_ids is None or order[0] in canonical_ids:
             values["yaw_deg"] = mean_yaw_error_deg(T_c_w @ gt_poses, T_c_w @ poses[ei])
     return CarTrackRow(gt_id=car.track_id, frames=len(frames),
