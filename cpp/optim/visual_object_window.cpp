@@ -19,6 +19,14 @@ double const_rotation_sigma(const VisualObjectWindow& w, int i, const VisualObje
   return o.const_sigma_rotation * fraction;
 }
 
+// e_det's sigma factor for the detection of window row i: its box centre's range from the
+// camera of that frame over the reference range, at least 1 (see the options)
+double detection_range_scale(const VisualObjectWindow& w, int i, const VisualObjectWindowOptions& o) {
+  if (!(o.det_sigma_reference_range_m > 0)) return 1.0;
+  const Vec3 centre_c = (w.T_c_w[i] * w.T_w_det[i]).topRightCorner<3, 1>();
+  return std::max(1.0, centre_c.norm() / o.det_sigma_reference_range_m);
+}
+
 }  // namespace
 
 VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCamera& camera,
@@ -77,13 +85,18 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
     for (int i = 0; i < n; ++i) {
       if (!w.has_detection[i]) continue;
       const Mat4 T_det = S * w.T_w_det[i];
+      const double scale = detection_range_scale(w, i, o);
       if (o.use_detection_pose && i >= w.num_fixed_frames)
-        b.add_detection_pose(object_block[i], T_det, o.det_pose_sigma_translation,
-                             o.det_pose_sigma_rotation, o.huber_det);
-      if (o.use_detection_twist && i + 1 < n && w.has_detection[i + 1] && i + 1 >= w.num_fixed_frames)
+        b.add_detection_pose(object_block[i], T_det, scale * o.det_pose_sigma_translation,
+                             scale * o.det_pose_sigma_rotation, o.huber_det);
+      if (o.use_detection_twist && i + 1 < n && w.has_detection[i + 1] && i + 1 >= w.num_fixed_frames) {
+        // the twist of two boxes is as uncertain as the farther of them
+        const double twist_scale = std::max(scale, detection_range_scale(w, i + 1, o));
         b.add_detection_twist(object_block[i], object_block[i + 1], Pi,
                               geometry::twist_between(T_det, S * w.T_w_det[i + 1]),
-                              o.det_sigma_translation, o.det_sigma_rotation, o.huber_det);
+                              twist_scale * o.det_sigma_translation,
+                              twist_scale * o.det_sigma_rotation, o.huber_det);
+      }
     }
   }
   if (o.use_registration && static_cast<int>(w.M_w_reg.size()) == n &&

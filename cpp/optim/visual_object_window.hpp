@@ -73,6 +73,10 @@ struct VisualObjectWindowOptions {
   double det_sigma_translation = 0.2;    // m/frame
   double det_sigma_rotation = 0.05;      // rad/frame
   double huber_det = 2.0;                // sigmas
+  // > 0: beyond this range (m, box centre from the camera of its frame) every e_det and
+  // detection-pose sigma grows in proportion to the range: a far car gives a detector fewer
+  // points, so its box centre and heading scatter more. 0: one sigma at every range
+  double det_sigma_reference_range_m = 0;
   // detection pose prior (not in the paper): a detection's box pose anchors the pose of its
   // frame; weak, so that the twists (visual, e_det, e_reg) keep the trajectory's shape
   double det_pose_sigma_translation = 0.3;  // m

@@ -261,6 +261,7 @@ void ObjectTracker::refine_window(int c) {
   wo.det_pose_sigma_translation = lidar_options_.det_pose_sigma_translation;
   wo.det_pose_sigma_rotation = lidar_options_.det_pose_sigma_rotation;
   wo.huber_det = lidar_options_.huber_det;
+  wo.det_sigma_reference_range_m = lidar_options_.det_sigma_reference_range_m;
   wo.use_registration = lidar_options_.use_registration;
   wo.reg_sigma_translation = lidar_options_.reg_sigma_translation;
   wo.reg_sigma_rotation = lidar_options_.reg_sigma_rotation;

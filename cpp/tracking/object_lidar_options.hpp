@@ -31,6 +31,7 @@ struct ObjectLidarOptions {
   double det_pose_sigma_translation = 0.3; // m
   double det_pose_sigma_rotation = 0.1;    // rad
   double huber_det = 2.0;                  // sigmas
+  double det_sigma_reference_range_m = 0.0;  // m; farther boxes: e_det sigmas x range / it (0: off)
   // e_reg: GICP between consecutive object scans (the points of the frame's scan inside the
   // canonical box, enlarged), registration/gicp.hpp
   bool use_registration = true;
@@ -72,6 +73,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("det_pose_sigma_translation", o.det_pose_sigma_translation, 1e-6, 1000.0);
   visit("det_pose_sigma_rotation", o.det_pose_sigma_rotation, 1e-6, 10.0);
   visit("huber_det", o.huber_det, 0.0, 1000.0);  // 0: no loss
+  visit("det_sigma_reference_range_m", o.det_sigma_reference_range_m, 0.0, 1000.0);
   visit("use_registration", o.use_registration, 0, 1);
   visit("scan_margin_m", o.scan_margin_m, 0.0, 100.0);
   visit("scan_ground_clearance_m", o.scan_ground_clearance_m, -10.0, 10.0);
