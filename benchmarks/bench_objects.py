@@ -12,6 +12,8 @@ on the simulator's sequence, ``.cache/sim/SCENARIO-seedS-nF``, generated when mi
   must lower RPE_r);
 * ``no-const``: ``visual_objects.use_const = False`` (no e_const in the BA);
 * ``dis``: OpenCV DIS flow instead of the flow files;
+* ``online`` / ``det-reg-online``: ``visual_objects.final_smoothing = False``, the poses as
+  the online tracking left them (no final smoothing of the whole tracks);
 * ``boxes-seg``: instance masks from the oracle detections instead of the panoptic files;
 * ``kp-only`` / ``kp-extra``: ``visual_objects.extra_keypoints`` False / True;
 * ``det`` / ``det-reg``: LiDAR fusion with the simulator's oracle 3D detections
@@ -97,6 +99,8 @@ ROWS = {r.name: r for r in [
     Row("free-link", {SECTION: {"planar_class_ids": []}}),
     Row("no-const", {SECTION: {"use_const": False}}),
     Row("dis", flow="dis"),
+    # the poses as tracked online: no final smoothing of the whole tracks
+    Row("online", {SECTION: {"final_smoothing": False}}),
     Row("boxes-seg", segmentation="boxes"),
     Row("kp-only", {SECTION: {"extra_keypoints": False}}),
     Row("kp-extra", {SECTION: {"extra_keypoints": True}}),
@@ -107,6 +111,7 @@ ROWS = {r.name: r for r in [
     # e_det), + detections + registration (e_reg)
     Row("det", {"lidar_objects": {"use_registration": False}}, detector="files"),
     Row("det-reg", detector="files"),
+    Row("det-reg-online", {SECTION: {"final_smoothing": False}}, detector="files"),
     # the whole system from raw stereo + LiDAR: the classical LiDAR detector of the core
     Row("classical", detector="classical"),
     # ... and its masks from the classical boxes too (no panoptic files: raw stereo + LiDAR)

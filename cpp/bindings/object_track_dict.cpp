@@ -16,6 +16,10 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
   for (const auto& f : t.frames) rows.push_back(&f);
   const auto K = static_cast<py::ssize_t>(rows.size());
   DoubleArray poses = new_array({K, 4, 4}), detected_poses = new_array({K, 4, 4});
+  // the poses before the final smoothing (the backcast rows were never smoothed)
+  DoubleArray online_poses = new_array({K, 4, 4});
+  const bool smoothed = t.T_w_o_online.size() == t.frames.size() && !t.frames.empty();
+  const auto B = static_cast<py::ssize_t>(t.backcast.size());
   DoubleArray twists = new_array({K, 6}), scores = new_array({K}), sizes = new_array({K, 3});
   DoubleArray ranges = new_array({K}), confidences = new_array({K});
   py::array_t<std::int64_t> frames(K), det_index(K);
@@ -26,6 +30,8 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
       for (int c = 0; c < 4; ++c) {
         poses.mutable_data()[k * 16 + r * 4 + c] = f.T_w_o(r, c);
         detected_poses.mutable_data()[k * 16 + r * 4 + c] = f.T_w_o_detected(r, c);
+        online_poses.mutable_data()[k * 16 + r * 4 + c] =
+            smoothed && k >= B ? t.T_w_o_online[k - B](r, c) : f.T_w_o(r, c);
       }
     for (int i = 0; i < 6; ++i) twists.mutable_data()[k * 6 + i] = f.xi[i];
     for (int i = 0; i < 3; ++i) sizes.mutable_data()[k * 3 + i] = f.detected_size[i];
@@ -47,7 +53,8 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
                   "detected"_a = detected, "reported"_a = reported, "score"_a = scores,
                   "range"_a = ranges, "frame_confidence"_a = confidences,
                   "detected_size"_a = sizes, "detection_index"_a = det_index,
-                  "canonical"_a = t.canonical, "registered"_a = registered);
+                  "canonical"_a = t.canonical, "registered"_a = registered,
+                  "T_w_o_online"_a = online_poses, "smoothed"_a = smoothed);
 }
 
 }  // namespace twistslam::bindings

@@ -177,6 +177,25 @@ dict
 state, link, frames, T_w_o (K, 4, 4) in the world frame, twist (K, 6), detected = a valid twist
 was estimated that frame, ...) and ``points_o`` (M, 3) its points in the object frame,
 ``point_found`` (M,) the frames each was matched in.)doc")
+      .def("smooth_objects",
+           [](t::System& s) {
+             const t::ObjectSmoothingReport r = s.smooth_objects();
+             return py::dict("num_tracks"_a = r.num_tracks, "num_rejected"_a = r.num_rejected,
+                             "num_residuals"_a = r.num_residuals);
+           },
+           R"doc(The final smoothing of the object tracks, once the sequence ends
+(``visual_objects.final_smoothing``; nothing when it is off): per track, all its rows, every
+observation its points made (culled points too), e_const, e_link, e_head and the LiDAR terms
+(e_det, the box pose prior, e_reg) in one problem, the cameras fixed at the refined
+trajectory. ``objects()`` then gives the smoothed ``T_w_o`` and the online poses as
+``T_w_o_online``. A track is smoothed once; one whose smoothed steps exceed
+``max_step_m`` keeps its online poses.
+
+Returns
+-------
+dict
+    num_tracks : int, tracks smoothed; num_rejected : int, tracks kept online (a smoothed
+    step beyond max_step_m); num_residuals : int, residuals over the smoothed tracks.)doc")
       .def("road_plane",
            [](const t::System& s) {
              const auto& r = s.road_plane();

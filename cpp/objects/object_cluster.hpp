@@ -24,6 +24,9 @@ struct ObjectPoint {
   ObjectPointObservation last;  // the latest observation (flow-guided search starts here)
   std::vector<ObjectPointObservation> history;  // the latest ones, oldest first (window BA)
   std::vector<ObjectPointObservation> keyframe_history;  // those at keyframes (local BA's e_dyna)
+  // every inlier observation since it was created, oldest first: the final smoothing's e_dyna
+  // over the whole track (kept only while the tracker's final_smoothing is on)
+  std::vector<ObjectPointObservation> archive;
   int visible = 1;              // frames in which it was predicted inside the image
   int found = 1;                // frames in which it was matched and an inlier
   LabelVotes class_votes;       // classes of its 2D observations (S3LAM-style vote)
@@ -37,6 +40,10 @@ struct ObjectCluster {
   LabelVotes class_votes;         // classes of the instances associated with it
   int instance = -1;              // instance id associated in the last frame (-1: none)
   Vec6 velocity = Vec6::Zero();   // last estimated twist (per frame), for the prediction
+  // points culled or replaced while the object was tracked, with their archives (final
+  // smoothing): a car that turns shows other faces, and the ones it showed before still fix
+  // its earlier poses. Re-expressed with every change of the object frame, never searched.
+  std::vector<ObjectPoint> retired;
 };
 
 }  // namespace twistslam::objects

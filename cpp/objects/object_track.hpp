@@ -75,6 +75,9 @@ struct ObjectTrack {
   bool heading_from_motion = false;  // its front was checked against the direction it moved
   // its rows before canonical_frame (a cluster's guesses) were re-placed once by the boxes
   bool birth_placed = false;
+  // per row, the pose the online tracking gave it before the final smoothing replaced T_w_o
+  // (empty: not smoothed)
+  std::vector<Mat4> T_w_o_online;
 
   bool alive() const { return state != TrackState::kDead; }
   bool ever_confirmed() const { return confirmed_frame >= 0; }

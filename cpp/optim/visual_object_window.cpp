@@ -9,6 +9,9 @@ namespace twistslam::optim {
 
 namespace {
 
+// frames up to which the reduced system is solved densely: MEASURED
+constexpr int kDenseSchurMaxFrames = 50;
+
 // e_const's rotation sigma at window row i (the triple i-1, i, i+1): see the options
 double const_rotation_sigma(const VisualObjectWindow& w, int i, const VisualObjectWindowOptions& o) {
   if (!(o.const_rotation_reference_step_m > 0)) return o.const_sigma_rotation;
@@ -49,18 +52,19 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
   std::vector<int> camera_block(n), object_block(n), point_block(w.X_o.size(), -1);
   for (int i = 0; i < n; ++i) {
     camera_block[i] = b.add_pose(w.T_c_w[i] * S_inv, /*fixed=*/true);
-    object_block[i] = b.add_pose(S * w.T_w_o[i], /*fixed=*/i < w.num_fixed_frames);
+    object_block[i] = b.add_pose(S * w.T_w_o[i], /*fixed=*/i < w.num_fixed_frames || i == w.gauge_frame);
   }
   std::vector<int> seen(w.X_o.size(), 0);
   for (const auto& obs : w.observations) ++seen[obs.point];
   for (size_t p = 0; p < w.X_o.size(); ++p)
     if (seen[p] > 0) point_block[p] = b.add_point(w.X_o[p], !o.refine_points);
-  // e_dyna (eq. 9)
+  // e_dyna (eq. 9); Huber thresholds in sigmas, so they scale with them
+  const double sigma_scale = o.reprojection_sigma_scale > 0 ? o.reprojection_sigma_scale : 1.0;
   for (const auto& obs : w.observations) {
     const double huber = obs.u_right >= 0 ? o.huber_stereo : o.huber_mono;
     b.add_dynamic_reprojection(camera_block[obs.frame], object_block[obs.frame],
                                point_block[obs.point], camera, obs.uv, obs.u_right,
-                               obs.inv_sigma2, huber, o.min_depth);
+                               obs.inv_sigma2 / (sigma_scale * sigma_scale), huber, o.min_depth);
   }
   const bool use_heading = o.use_heading && w.travel_axis_o.norm() > 0.5;  // a unit axis or zero
   for (int i = 0; i + 1 < n; ++i) {
@@ -115,7 +119,9 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
   detail::SolveOptions so;
   so.max_iterations = o.max_iterations;
   so.num_threads = 1;
-  so.linear_solver_override = ceres::DENSE_SCHUR;  // a few poses, points eliminated
+  // points eliminated; the reduced system of a sliding window's few poses is dense, a whole
+  // track's (the final smoothing) is banded by e_const and the points' short lives
+  so.linear_solver_override = n <= kDenseSchurMaxFrames ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
   so.initial_trust_region_radius = 1e4;
   const detail::SolveSummary s = b.solve(so);
   out.usable = s.usable;
@@ -123,7 +129,8 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
   out.initial_cost = s.initial_cost;
   out.final_cost = s.final_cost;
   if (!out.usable) return out;
-  for (int i = w.num_fixed_frames; i < n; ++i) w.T_w_o[i] = S_inv * b.pose(object_block[i]);
+  for (int i = w.num_fixed_frames; i < n; ++i)
+    if (i != w.gauge_frame) w.T_w_o[i] = S_inv * b.pose(object_block[i]);
   if (o.refine_points)
     for (size_t p = 0; p < w.X_o.size(); ++p)
       if (point_block[p] >= 0) w.X_o[p] = b.point(point_block[p]);

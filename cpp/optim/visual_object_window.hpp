@@ -34,6 +34,9 @@ struct VisualObjectWindow {
   std::vector<Vec3> X_o;     // points in the object frame; refined in place
   std::vector<VisualObjectObservation> observations;
   int num_fixed_frames = 1;  // leading poses held fixed (the gauge and the past)
+  // >= 0: this pose is held fixed as well (the gauge of a whole track, where its leading
+  // poses are the least settled; the object frame's points follow it)
+  int gauge_frame = -1;
   // e_head: the travel axis in the object frame (zero: unknown, no term) and the road normal
   Vec3 travel_axis_o = Vec3::Zero();
   Vec3 up_w = Vec3(0, -1, 0);
@@ -49,6 +52,9 @@ struct VisualObjectWindow {
 };
 
 struct VisualObjectWindowOptions {
+  // e_dyna's sigmas (the observations' pyramid-level sigmas) times this: < 1 trusts the
+  // keypoints more than the other terms, > 1 less
+  double reprojection_sigma_scale = 1.0;
   double huber_stereo = 2.796;           // px, sqrt(chi2 3 dof 95 %) as the BA
   double huber_mono = 2.448;             // px, sqrt(chi2 2 dof 95 %)
   double const_sigma_translation = 0.05; // m/frame, change of the translational twist

@@ -9,11 +9,14 @@
 
 namespace twistslam::tracking::detail {
 
-// The point's latest observation, also appended to its bounded history (window BA).
-inline void observe(objects::ObjectPoint& p, const objects::ObjectPointObservation& o, int window) {
+// The point's latest observation, also appended to its bounded history (window BA) and, with
+// `archive`, to its whole-life archive (final smoothing).
+inline void observe(objects::ObjectPoint& p, const objects::ObjectPointObservation& o, int window,
+                    bool archive) {
   p.last = o;
   p.history.push_back(o);
   if (static_cast<int>(p.history.size()) > std::max(window, 1)) p.history.erase(p.history.begin());
+  if (archive) p.archive.push_back(o);
 }
 
 inline Vec3 transform(const Mat4& T, const Vec3& X) {

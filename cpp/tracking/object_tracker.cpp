@@ -261,7 +261,8 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
       const Match& m = matches[j];
       objects::ObjectPoint& p = cluster.points[m.point];
       observe(p, {frame.index, frame.keypoints.uv[m.keypoint], frame.keypoints.u_right[m.keypoint],
-                  frame.keypoints.octave[m.keypoint]}, options_.window_frames);
+                  frame.keypoints.octave[m.keypoint]}, options_.window_frames,
+              options_.final_smoothing);
       p.descriptor = frame.keypoints.descriptors[m.keypoint];
       p.class_votes.add(frame.keypoints.label[m.keypoint]);
       ++p.found;

@@ -31,6 +31,7 @@
 #include "objects/object_cluster.hpp"
 #include "objects/object_track.hpp"
 #include "objects/twist_estimation.hpp"
+#include "optim/visual_object_window.hpp"
 #include "tracking/frame.hpp"
 #include "tracking/level_weights.hpp"
 #include "objects/detection.hpp"
@@ -39,6 +40,13 @@
 #include "tracking/object_tracking_options.hpp"
 
 namespace twistslam::tracking {
+
+// What the final smoothing did (object_smoothing.cpp).
+struct ObjectSmoothingReport {
+  int num_tracks = 0;     // tracks refined (their T_w_o replaced, the online poses kept)
+  int num_rejected = 0;   // tracks whose smoothed steps failed max_step_m: kept online
+  int num_residuals = 0;  // over all refined tracks
+};
 
 struct ObjectTrackingReport {
   int num_tracked = 0;  // clusters with a valid twist this frame
@@ -79,6 +87,14 @@ class ObjectTracker : public ObjectBundleTerms {
                         optim::BAProblem* problem) override;
   void take_bundle_result(const optim::BAProblem& problem,
                           const optim::BundleAdjustmentReport& report) override;
+
+  // The final smoothing, once the sequence ends (options.final_smoothing; the paper's global
+  // BA of the object terms with the cameras fixed): per track, all its rows, every archived
+  // observation of its points (retired ones too), e_const, e_link, e_head and the LiDAR terms
+  // in one problem. T_c_w_of_frame: the refined camera pose of every tracked frame. Each
+  // refined track keeps its online poses in T_w_o_online. A track with a frame missing from
+  // T_c_w_of_frame, or fewer than 3 rows, is left as it is.
+  ObjectSmoothingReport smooth_tracks(const std::map<int, Mat4>& T_c_w_of_frame);
 
   const std::vector<objects::ObjectTrack>& tracks() const { return tracks_; }
   const std::vector<objects::ObjectCluster>& clusters() const { return clusters_; }
@@ -158,6 +174,20 @@ class ObjectTracker : public ObjectBundleTerms {
   // e_dyna + e_const (+ e_head) over the cluster's last window_frames frames (eq. 9), camera
   // fixed.
   void refine_window(int c);
+  // The object window of cluster c's rows [first, first + rows): camera poses from
+  // camera_of, its poses, the observations its points made in those frames (their bounded
+  // history, or with `whole_life` their archives and the retired points' too), the travel
+  // axis and the LiDAR terms. used: per window point, the cluster point index, or -1 - k for
+  // retired point k. False when a frame has no camera pose.
+  bool build_window(int c, int first, int rows, const std::map<int, Mat4>& camera_of,
+                    bool whole_life, optim::VisualObjectWindow* w, std::vector<int>* used) const;
+  optim::VisualObjectWindowOptions window_options(const objects::ObjectTrack& track) const;
+  // Takes a refined window back into rows [first, first + rows) (poses past the fixed ones,
+  // twists, velocity, points); false, and nothing changed, when a step exceeds max_step_m.
+  bool take_window(int c, int first, const optim::VisualObjectWindow& w, const std::vector<int>& used);
+  // Points leave the cluster (culled, dropped by a re-seed): into `retired` with their
+  // archives when the final smoothing is on and they were seen twice.
+  void retire(objects::ObjectCluster& cluster, std::vector<objects::ObjectPoint>&& points) const;
   // The last step of a tracked vehicle joins its travel direction (non-holonomic prior).
   void add_travel_step(objects::ObjectTrack& track) const;
   // Moves the object frame's origin to the median of the cluster's confirmed points when it

@@ -55,6 +55,10 @@ struct ObjectTrackingOptions {
   double const_rotation_min_fraction = 0.1;      // of const_sigma_rotation, at rest
   int window_iterations = 5;        // Ceres iterations of the window
   double recenter_distance_m = 0.5; // origin moved to the points' median beyond this (0: never)
+  // once the sequence ends, every track's rows, all observations of its points and its LiDAR
+  // terms in one problem (tracking/object_smoothing.cpp); the online poses are kept beside
+  bool final_smoothing = true;
+  int smoothing_iterations = 10;     // Ceres iterations of the final smoothing, per track
   // non-holonomic prior in the window (optim/heading_cost.hpp), planar-link classes
   bool nonholonomic = true;
   double lateral_sigma_m = 0.02;     // m/frame across the travel axis
@@ -116,6 +120,8 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("const_rotation_min_fraction", o.const_rotation_min_fraction, 1e-3, 1.0);
   visit("window_iterations", o.window_iterations, 1, 1000);
   visit("recenter_distance_m", o.recenter_distance_m, 0.0, 1000.0);
+  visit("final_smoothing", o.final_smoothing, 0, 1);
+  visit("smoothing_iterations", o.smoothing_iterations, 1, 1000);
   visit("nonholonomic", o.nonholonomic, 0, 1);
   visit("lateral_sigma_m", o.lateral_sigma_m, 1e-4, 100.0);
   visit("travel_min_path_m", o.travel_min_path_m, 0.0, 10000.0);

@@ -1,6 +1,7 @@
 #include "tracking/system.hpp"
 
 #include <chrono>
+#include <map>
 #include <stdexcept>
 #include <utility>
 
@@ -195,6 +196,15 @@ std::vector<std::pair<TrajectoryEntry, Mat4>> System::trajectory() const {
     out.emplace_back(e, geometry::se3_inverse(T_c_w));
   }
   return out;
+}
+
+ObjectSmoothingReport System::smooth_objects() {
+  // the objects were tracked against each frame's pose as it was then; local BA has refined
+  // the keyframes since, and through them every frame (trajectory())
+  std::map<int, Mat4> T_c_w_of_frame;
+  for (const auto& [entry, T_w_c] : trajectory())
+    T_c_w_of_frame[entry.frame_index] = geometry::se3_inverse(T_w_c);
+  return object_tracker_.smooth_tracks(T_c_w_of_frame);
 }
 
 }  // namespace twistslam::tracking

@@ -67,6 +67,10 @@ class System {
   std::vector<std::pair<TrajectoryEntry, Mat4>> trajectory() const;
   const map::Map& map() const { return map_; }
   const ObjectTracker& objects() const { return object_tracker_; }
+  // The object tracks' final smoothing against the refined trajectory (ObjectTracker::
+  // smooth_tracks): once the sequence ends; tracking more frames afterwards is allowed, but
+  // a smoothed track is never smoothed again.
+  ObjectSmoothingReport smooth_objects();
   const objects::RoadPlaneEstimator& road_plane() const { return road_plane_; }
   const SlamOptions& options() const { return options_; }
   void reset();

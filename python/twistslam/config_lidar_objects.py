@@ -137,3 +137,9 @@ class LidarObjectsConfig:
         "term", "rad/frame")
     huber_reg: float = param(2.0, "a registration to a wrong scan (merged objects) is an "
                              "outlier", "sigmas")
+    smoothing_keypoint_sigma_scale: float = param(
+        5.0, "in the final smoothing (visual_objects.final_smoothing) of a track with LiDAR "
+        "terms, its keypoints' reprojection sigmas are multiplied by this: a point's stereo and "
+        "reprojection errors repeat over the many frames that see it (same texture, same sub-pixel "
+        "phase), which the whole track's problem would count as independent, while the boxes and "
+        "the registered scans already carry the motion. MEASURED", "ratio")

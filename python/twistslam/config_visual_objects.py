@@ -149,6 +149,13 @@ class VisualObjectsConfig:
         0.5, "the object frame's origin moves to the median of the cluster's confirmed points "
         "when farther than this: a cluster born at 40 m sits metres off in depth until its "
         "points are refined closer (0: never)", "m")
+    final_smoothing: bool = param(
+        True, "when the run ends, every track is refined once more in one problem: all its rows, "
+        "every observation of its points (culled ones too), e_const, e_link, e_head and the "
+        "LiDAR terms, camera poses fixed at the refined trajectory (the paper's global BA of the "
+        "object terms; the sliding window sees 8 frames and freezes the rows it leaves). "
+        "result.objects keeps the online poses as T_w_o_online. MEASURED: see docs/visual_objects.md")
+    smoothing_iterations: int = param(10, "Ceres iterations of the final smoothing per track")
     nonholonomic: bool = param(
         True, "vehicles (planar-link classes) move along their heading: the window adds "
         "e_head, the measured step across the travel axis learned from the track (not in "

@@ -236,6 +236,14 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
                 viewer.log(item, out, slam)
     if viewer is not None:
         viewer.close()
+    if (perception.segmentation is not None and config.visual_objects.enabled
+            and config.visual_objects.final_smoothing and tracked):
+        # once, after the last frame: its time is the last frame's (stage object_smoothing)
+        start = time.perf_counter()
+        slam.smooth_objects()
+        smoothing_ms = (time.perf_counter() - start) * 1e3
+        stages[-1]["object_smoothing"] = smoothing_ms
+        frame_ms[-1] += smoothing_ms
 
     tracked_poses = np.stack([t.T_w_c for t in tracked])
     frames = [t.index for t in tracked]

@@ -289,6 +289,18 @@ class Slam:
             return []
         return list(self._system.objects())
 
+    def smooth_objects(self) -> dict[str, int]:
+        """The final smoothing of the object tracks, once the sequence ends
+        (``config.visual_objects.final_smoothing``; ``twistslam.run`` calls it): per track,
+        all its rows and every observation of its points, e_const, e_link, e_head and the
+        LiDAR terms in one problem, the cameras fixed at the refined trajectory. Afterwards
+        :meth:`objects` gives the smoothed ``T_w_o`` and the online poses as
+        ``T_w_o_online``. Returns ``num_tracks`` (smoothed), ``num_rejected`` (kept online:
+        a smoothed step beyond ``max_step_m``) and ``num_residuals``."""
+        if self._system is None:
+            return {"num_tracks": 0, "num_rejected": 0, "num_residuals": 0}
+        return dict(self._system.smooth_objects())
+
     def road_plane(self) -> dict | None:
         """The road plane of the planar link (``valid``, ``plane`` (4,) = (n, d) with
         n . X_w + d = 0, ``num_points``, ``num_fits``, ``last_inliers``); None before the first

@@ -91,6 +91,10 @@ class FakeSystem:
     def objects(self):
         return []
 
+    def smooth_objects(self):
+        self.smoothed = True
+        return {"num_tracks": 0, "num_rejected": 0, "num_residuals": 0}
+
     def reset(self):
         self.calls.clear()
 

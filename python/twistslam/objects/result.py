@@ -43,6 +43,9 @@ class TrackedObject:
         detection was associated (before that the box is fitted to the cluster's points).
     has_box : (K,) bool, a 3D detection was associated in that frame (None: same as
         ``detected``, the detections tracker).
+    T_w_o_online : (K, 4, 4) the poses as the online tracking left them, before the final
+        smoothing of visual object tracking (``visual_objects.final_smoothing``) replaced
+        ``T_w_o``; None where there was no smoothing (then ``T_w_o`` is online).
     """
 
     track_id: int
@@ -62,6 +65,7 @@ class TrackedObject:
     backcast: int = 0
     canonical: bool = True
     has_box: np.ndarray | None = None
+    T_w_o_online: np.ndarray | None = None
 
     def __repr__(self) -> str:
         return (f"TrackedObject(id={self.track_id}, {self.cls}, {self.state}, frames "

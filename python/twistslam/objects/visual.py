@@ -78,8 +78,7 @@ class VisualObjects:
         reported when its twist was valid, or when the twist failed while the cluster's
         instance was seen and its stereo points re-seeded the cluster (``detected`` False).
         Rows predicted through misses are left out."""
-        return [dataclasses.replace(o, frames=o.frames[o.reported], T_w_o=o.T_w_o[o.reported])
-                for o in self.objects if o.reported.any()]
+        return [_rows(o, o.reported) for o in self.objects if o.reported.any()]
 
     def __repr__(self) -> str:
         return f"VisualObjects({len(self)} clusters, {len(self.tracking)} boxes)"
@@ -98,6 +97,17 @@ class VisualObjects:
                            f"{o.track_id}/T_o_box": self.T_o_box[o.track_id]})
         np.savez_compressed(paths["object_points"], **arrays)
         return paths
+
+
+#: TrackedObject's per-row arrays (row k = frame frames[k]; None where a track has none)
+_ROW_FIELDS = ("frames", "T_w_o", "velocity_kmh", "detected", "reported", "score", "range",
+               "has_box", "T_w_o_online")
+
+
+def _rows(obj: TrackedObject, keep: np.ndarray) -> TrackedObject:
+    """The track restricted to the rows ``keep`` (bool mask or indices), every per-row array."""
+    return dataclasses.replace(obj, **{name: getattr(obj, name)[keep] for name in _ROW_FIELDS
+                                       if getattr(obj, name) is not None})
 
 
 def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.ndarray],
@@ -133,7 +143,9 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
             detected=np.asarray(c["detected"], dtype=bool), reported=reported,
             score=np.zeros(len(frames)), mean_score=0.0, confidence=float(c["hits"]),
             range=np.linalg.norm(T_w_box[:, :3, 3], axis=1), canonical=canonical,
-            has_box=np.asarray(c.get("detection_index", np.full(len(frames), -1))) >= 0))
+            has_box=np.asarray(c.get("detection_index", np.full(len(frames), -1))) >= 0,
+            T_w_o_online=(np.asarray(c["T_w_o_online"]).reshape(-1, 4, 4) if c.get("smoothed")
+                          else None)))
         rows = np.flatnonzero(reported)
         # a cluster whose points were all culled (or a flat one) has no box to write
         if not len(rows) or calib is None or not (size > 0).all():

@@ -275,3 +275,51 @@ TEST(VisualObjectWindow, AFarCarsScatteredBoxesPullItsStepsLessWithRangeScaledSi
   // (measured over seeds 1-4: 0.39 m of step error fixed, 0.17 m scaled)
   EXPECT_LT(sum_scaled, 0.7 * sum_fixed) << "fixed " << sum_fixed << " m, scaled " << sum_scaled << " m";
 }
+
+// The final smoothing's window (tracking/object_windows.cpp): a whole track, one pose held as
+// the gauge wherever it lies, the reduced system sparse beyond a few tens of frames.
+TEST(VisualObjectWindow, GaugeFrameHoldsItsPoseAndTheOthersFollowTheObservations) {
+  const Mat6 Pi = geometry::projector_planar(kUp);
+  LeadCarScene s = lead_car(10, 0.0, 6);
+  // every pose but the gauge starts 0.5 m off in depth
+  const int gauge = 6;
+  for (int f = 0; f < 10; ++f)
+    if (f != gauge) s.window.T_w_o[f](2, 3) += 0.5;
+  for (Vec3& X : s.window.X_o) X.z() = 0.0;  // the points as the gauge pose sees them
+  s.window.num_fixed_frames = 0;
+  s.window.gauge_frame = gauge;
+  s.window.travel_axis_o = Vec3(0, 0, 1);
+  const Mat4 held = s.window.T_w_o[gauge];
+  VisualObjectWindowOptions o;
+  o.max_iterations = 20;
+  ASSERT_TRUE(refine_visual_object_window(test_scenes::kitti_camera(), s.window, Pi, o).usable);
+  EXPECT_TRUE(s.window.T_w_o[gauge] == held);
+  for (int f = 0; f < 10; ++f) {
+    // 0.5 m at the start; the stereo observations (0.5 px at 40 m) bring them to 0.02-0.16 m
+    EXPECT_LT((s.window.T_w_o[f].topRightCorner<3, 1>() - s.T_w_o_true[f].topRightCorner<3, 1>()).norm(), 0.25)
+        << "frame " << f;
+  }
+}
+
+TEST(VisualObjectWindow, AWholeTracksWindowIsSolvedAndScaledSigmasWeighTheKeypointsLess) {
+  const Mat6 Pi = geometry::projector_planar(kUp);
+  // 80 frames: beyond the dense reduced system's size
+  LeadCarScene s = lead_car(80, 0.05, 7);
+  s.window.travel_axis_o = Vec3(0, 0, 1);
+  VisualObjectWindowOptions o;
+  o.max_iterations = 20;
+  LeadCarScene scaled = s;
+  const VisualObjectWindowSummary plain = refine_visual_object_window(test_scenes::kitti_camera(), s.window, Pi, o);
+  ASSERT_TRUE(plain.usable);
+  for (int f = 0; f < 80; f += 10) {
+    EXPECT_LT(yaw_error_deg(s.window.T_w_o[f], s.T_w_o_true[f]), 1.0) << "frame " << f;
+    EXPECT_LT((s.window.T_w_o[f].topRightCorner<3, 1>() - s.T_w_o_true[f].topRightCorner<3, 1>()).norm(), 0.5)
+        << "frame " << f;
+  }
+  // the same problem with every reprojection sigma doubled: a quarter of the keypoint cost
+  o.reprojection_sigma_scale = 2.0;
+  const VisualObjectWindowSummary half = refine_visual_object_window(test_scenes::kitti_camera(), scaled.window, Pi, o);
+  ASSERT_TRUE(half.usable);
+  EXPECT_EQ(half.num_residuals, plain.num_residuals);
+  EXPECT_LT(half.initial_cost, 0.5 * plain.initial_cost);
+}

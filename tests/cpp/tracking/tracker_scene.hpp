@@ -86,6 +86,10 @@ struct SceneFrame {
   cv::Mat flow;       // CV_32FC2, NaN where unknown (filled at the car's keypoints)
   bool mono = false;  // keypoints without a stereo match (the right camera does not see them)
   double stereo_depth_scale = 1.0;  // stereo depth of every keypoint times this (a disparity bias)
+  // > 0 with noise_rng: Gaussian noise of every stereo match's right column (px), the depth
+  // following the disparity (a real matcher's sub-pixel error)
+  double disparity_noise_px = 0;
+  std::mt19937* noise_rng = nullptr;
 
   explicit SceneFrame(int index) {
     frame.index = index;
@@ -103,8 +107,13 @@ struct SceneFrame {
     k.uv.push_back(uv);
     k.octave.push_back(octave);
     const Vec3 X_stereo = stereo_depth_scale * X_c;  // on the same ray, farther or nearer
-    k.u_right.push_back(mono ? -1.0 : kCamera.project_right(X_stereo).x());
-    k.depth.push_back(mono ? -1.0 : X_stereo.z() + kCamera.t_left.z());
+    double u_right = kCamera.project_right(X_stereo).x(), depth = X_stereo.z() + kCamera.t_left.z();
+    if (!mono && disparity_noise_px > 0 && noise_rng) {
+      u_right += std::normal_distribution<double>(0.0, disparity_noise_px)(*noise_rng);
+      depth = kCamera.depth_from_disparity(uv.x() - u_right);
+    }
+    k.u_right.push_back(mono ? -1.0 : u_right);
+    k.depth.push_back(mono ? -1.0 : depth);
     k.descriptors.push_back(d);
     k.label.push_back(label);
     frame.usable.push_back(label == kRoad);
