@@ -31,7 +31,7 @@ Per row: mean object RPE_t (m/m), RPE_r (deg/m) and aligned ATE (m) over the mov
 seen 20+ frames within 50 m (:mod:`twistslam.eval.object_tracks`), cars tracked in >= 90 %
 of those frames, ghost tracks, camera ATE (m, aligned) and RPE (m/frame, deg/frame) against
 ``poses/SEQ.txt``, median ms per object per frame of every timing stage named ``object*``,
-median flow ms, and the loop's Hz. A row whose config key or run argument does not exist
+median flow ms, the loop's Hz and the final smoothing's ms (once, after the loop). A row whose config key or run argument does not exist
 yet prints "not available" and the reason.
 
 Issue 11's figures, per row: the canonical ATE / RPE columns (no offset, no alignment), the
@@ -308,8 +308,14 @@ def format_row(label: str, name: str, ev, cam, result, figures: dict[str, float]
     return (f"{label:<14} {name:<10} {ev.rpe_t:>6.3f} {ev.rpe_r:>6.3f} {ev.ate_aligned:>6.3f} "
             f"{f'{ev.n_tracked}/{len(ev.cars)}':>8} {ev.n_ghosts:>6} {cam.ate_rmse:>7.3f} "
             f"{cam.rpe_t_mean:>8.4f} {cam.rpe_r_mean:>8.4f} {median_stage(result, 'flow'):>7.1f} "
-            f"{result.timings.hz:>6.1f}  {obj_ms}{canonical_columns(ev)}; yaw "
+            f"{result.timings.hz:>6.1f}  {obj_ms}{smoothing_ms(result)}{canonical_columns(ev)}; yaw "
             f"{figures['yaw_deg']:.2f}; TP3D {figures['tp_3d']:.1f} MOTP3D {figures['motp_3d']:.1f}")
+
+
+def smoothing_ms(result) -> str:
+    """The final smoothing's time (ms, once after the last frame, outside the loop's Hz)."""
+    ms = getattr(result.timings, "after_loop_ms", {}).get("object_smoothing")
+    return "" if ms is None else f"; final smoothing {ms:.0f} ms"
 
 
 def canonical_columns(ev) -> str:

@@ -242,7 +242,13 @@ SolveSummary ProblemBuilder::solve(const SolveOptions& opt) {
   o.linear_solver_ordering = ordering;
   if (opt.linear_solver_override) {
     o.linear_solver_type = *opt.linear_solver_override;
-    o.linear_solver_ordering.reset();
+    // a Schur solver eliminates the points; without them (or without Schur) Ceres orders
+    const bool schur = o.linear_solver_type == ceres::DENSE_SCHUR ||
+                       o.linear_solver_type == ceres::SPARSE_SCHUR ||
+                       o.linear_solver_type == ceres::ITERATIVE_SCHUR;
+    const bool points = std::any_of(blocks_.begin(), blocks_.end(), [](const Block& b) { return b.eliminate; });
+    if (!schur || !points) o.linear_solver_ordering.reset();
+    if (o.linear_solver_type == ceres::ITERATIVE_SCHUR) o.preconditioner_type = ceres::SCHUR_JACOBI;
   }
 
   std::string error;

@@ -107,24 +107,59 @@ bool ObjectTracker::build_window(int c, int first, int rows, const std::map<int,
   }
   const int first_frame = track.frames[first].frame;
   const double min_depth = optim::VisualObjectWindowOptions().min_depth;
-  const optim::VisualObjectWindow* gate = whole_life ? w : nullptr;
-  for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) {
-    const objects::ObjectPoint& p = cluster.points[i];
-    if (!add_observations(whole_life ? p.archive : p.history, first_frame, rows,
-                          static_cast<int>(w->X_o.size()), p.X_o, weights_, gate, min_depth,
-                          &w->observations))
-      continue;
-    used->push_back(i);
-    w->X_o.push_back(p.X_o);
-  }
-  if (whole_life) {
-    for (int i = 0; i < static_cast<int>(cluster.retired.size()); ++i) {
-      const objects::ObjectPoint& p = cluster.retired[i];
-      if (!add_observations(p.archive, first_frame, rows, static_cast<int>(w->X_o.size()), p.X_o,
-                            weights_, gate, min_depth, &w->observations))
+  if (!whole_life) {
+    for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) {
+      const objects::ObjectPoint& p = cluster.points[i];
+      if (!add_observations(p.history, first_frame, rows, static_cast<int>(w->X_o.size()), p.X_o,
+                            weights_, nullptr, min_depth, &w->observations))
         continue;
-      used->push_back(-1 - i);
+      used->push_back(i);
       w->X_o.push_back(p.X_o);
+    }
+  } else {
+    // every point the track ever had (retired ones too), in spans of at most
+    // smoothing_point_span_frames frames (each span its own point), the longest first; a span
+    // joins while one of its frames has fewer than smoothing_frame_observations. A car tracked
+    // for 100 frames collects ~2000 points and 18k observations, most of them short-lived and
+    // adding solver time rather than information; a point's errors repeat over the frames
+    // that see it (same texture, sub-pixel phase, slow drift of the match), and its span
+    // bounds how far apart two poses it ties are (the reduced system's band)
+    struct Span {
+      int code;  // i: live point i, -1 - k: retired point k
+      std::vector<objects::ObjectPointObservation> seen;
+    };
+    std::vector<Span> spans;
+    auto add_spans = [&](int code, const objects::ObjectPoint& p) {
+      const int span = std::max(options_.smoothing_point_span_frames, 1);
+      for (const auto& o : p.archive) {
+        if (spans.empty() || spans.back().code != code || o.frame - spans.back().seen.front().frame >= span)
+          spans.push_back({code, {}});
+        spans.back().seen.push_back(o);
+      }
+    };
+    for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) add_spans(i, cluster.points[i]);
+    for (int k = 0; k < static_cast<int>(cluster.retired.size()); ++k) add_spans(-1 - k, cluster.retired[k]);
+    std::stable_sort(spans.begin(), spans.end(),
+                     [](const Span& a, const Span& b) { return a.seen.size() > b.seen.size(); });
+    const int quota = options_.smoothing_frame_observations;
+    std::vector<int> per_frame(rows, 0);
+    for (const Span& span : spans) {
+      if (quota > 0) {
+        bool needed = false;
+        for (const auto& o : span.seen) {
+          const int f = o.frame - first_frame;
+          needed |= f >= 0 && f < rows && per_frame[f] < quota;
+        }
+        if (!needed) continue;
+      }
+      const Vec3& X_o = span.code >= 0 ? cluster.points[span.code].X_o : cluster.retired[-1 - span.code].X_o;
+      const size_t before = w->observations.size();
+      if (!add_observations(span.seen, first_frame, rows, static_cast<int>(w->X_o.size()), X_o,
+                            weights_, w, min_depth, &w->observations))
+        continue;
+      for (size_t e = before; e < w->observations.size(); ++e) ++per_frame[w->observations[e].frame];
+      used->push_back(span.code);
+      w->X_o.push_back(X_o);
     }
   }
   if (options_.nonholonomic && track.link == geometry::LinkType::kPlanar) {
@@ -209,7 +244,7 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
     std::vector<int> used;
     if (!build_window(c, 0, rows, T_c_w_of_frame, true, &w, &used)) continue;
     // the gauge: the boxes' pose priors where they frame the object (as the birth placement),
-    // else the first row (a cluster's frame is its first pose; the points follow it)
+    // else one row held fixed (a cluster's frame is one of its poses; the points follow it)
     const bool boxes_hold = track.canonical && lidar_options_.use_detection_pose &&
                             count_boxes(track) >= kMinBoxesForFreeGauge;
     w.num_fixed_frames = 0;
@@ -230,8 +265,7 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
     bool lidar_terms = false;
     for (const objects::TrackFrame& row : track.frames) lidar_terms |= row.has_detection() || row.registered;
     if (lidar_terms) wo.reprojection_sigma_scale = lidar_options_.smoothing_keypoint_sigma_scale;
-    optim::VisualObjectWindowSummary s;
-    s = optim::refine_visual_object_window(camera_, w, track.Pi, wo);
+    const optim::VisualObjectWindowSummary s = optim::refine_visual_object_window(camera_, w, track.Pi, wo);
     if (!s.usable) continue;
     std::vector<Mat4> online;
     online.reserve(rows);

@@ -143,6 +143,8 @@ def _run_run(args: argparse.Namespace) -> int:
     print(f"{result.seq or args.root}: {len(result)} frames, {t['hz']:.1f} Hz "
           f"(median {t['per_frame_ms']['median']:.1f} ms/frame), {result.num_lost} lost, "
           f"{int(result.is_keyframe.sum())} keyframes")
+    for name, ms in t["after_loop_ms"].items():
+        print(f"after the last frame: {name} {ms:.0f} ms")
     print(f"wrote {', '.join(p.name for p in paths.values())} in {args.out}")
     return 0
 

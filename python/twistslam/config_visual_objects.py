@@ -156,6 +156,14 @@ class VisualObjectsConfig:
         "object terms; the sliding window sees 8 frames and freezes the rows it leaves). "
         "result.objects keeps the online poses as T_w_o_online. MEASURED: see docs/visual_objects.md")
     smoothing_iterations: int = param(10, "Ceres iterations of the final smoothing per track")
+    smoothing_frame_observations: int = param(
+        30, "the final smoothing takes a track's points longest-seen first, each while one of "
+        "the frames it was seen in has fewer observations than this (0: every point). MEASURED",
+        "observations")
+    smoothing_point_span_frames: int = param(
+        20, "in the final smoothing a point's observations are split into spans of this many "
+        "frames, each its own point: its errors repeat over the frames that see it, and the span "
+        "bounds the band of the reduced system. MEASURED", "frames")
     nonholonomic: bool = param(
         True, "vehicles (planar-link classes) move along their heading: the window adds "
         "e_head, the measured step across the travel axis learned from the track (not in "

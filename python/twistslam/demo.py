@@ -135,6 +135,7 @@ def _run_markdown(result: Result) -> str:
         f"p90 {t['per_frame_ms']['p90']:.1f} ms, max {t['per_frame_ms']['max']:.1f} ms.", "",
         "| stage | median ms |", "|---|---:|",
         *(f"| {name} | {ms:.2f} |" for name, ms in t["stages"].items() if ms is not None), "",
+        *(f"After the last frame: {name} {ms:.0f} ms." for name, ms in t["after_loop_ms"].items()),
     ]
     return "\n".join(lines)
 

@@ -20,10 +20,14 @@ class Timings:
         ``track`` (the whole core call) and the core's own stages (``features``, ``stereo``, ``track_motion``,
         ``track_local_map``, ``keyframe``, ``local_ba``); NaN where a stage did not run
         on that frame (local BA runs on keyframes only).
+    after_loop_ms : name -> ms of the steps run once after the last frame, outside the
+        per-frame loop and its ``hz`` (``object_smoothing``: the final smoothing of the object
+        tracks, ``visual_objects.final_smoothing``).
     """
 
     frame_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
     stages: dict[str, np.ndarray] = field(default_factory=dict)
+    after_loop_ms: dict[str, float] = field(default_factory=dict)
 
     @classmethod
     def from_frames(cls, per_frame: list[dict[str, float]], frame_ms: list[float]) -> "Timings":
@@ -43,7 +47,8 @@ class Timings:
 
     def summary(self) -> dict:
         """The ``timings.json`` layout: ``{"frames", "hz", "per_frame_ms": {"median", "p90",
-        "max"}, "stages": {name: median ms over the frames where it ran}}``."""
+        "max"}, "stages": {name: median ms over the frames where it ran}, "after_loop_ms":
+        {name: ms}}``."""
         def stat(fn, values):
             return round(float(fn(values)), 3) if len(values) else None
 
@@ -61,4 +66,5 @@ class Timings:
                 "max": stat(np.max, ms),
             },
             "stages": stages,
+            "after_loop_ms": {name: round(float(ms), 3) for name, ms in self.after_loop_ms.items()},
         }

@@ -189,7 +189,8 @@ def test_timings(fake, tiny):
     assert np.isnan(t.stages["local_ba"]).sum() == 6  # only keyframes 0 and 5 ran it
     assert (t.frame_ms >= t.stages["track"]).all()
     s = t.summary()
-    assert set(s) == {"frames", "hz", "per_frame_ms", "stages"}
+    assert set(s) == {"frames", "hz", "per_frame_ms", "stages", "after_loop_ms"}
+    assert s["after_loop_ms"] == {}  # no segmentation: no objects to smooth
     assert set(s["per_frame_ms"]) == {"median", "p90", "max"}
     assert s["frames"] == 8 and s["hz"] > 0
     assert s["stages"]["local_ba"] == 10.0 and s["stages"]["features"] == 2.0
