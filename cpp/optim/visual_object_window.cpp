@@ -9,7 +9,9 @@ namespace twistslam::optim {
 
 namespace {
 
-// frames up to which the reduced system is solved densely: MEASURED
+// frames up to which the reduced system is solved densely (the sliding window's 8 always):
+// with the points eliminated, a 100-pose track took about as long either way (crowded s2:
+// 170-340 ms dense, 180-240 ms sparse, measured); a longer track's band stays sparse
 constexpr int kDenseSchurMaxFrames = 50;
 
 // e_const's rotation sigma at window row i (the triple i-1, i, i+1): see the options

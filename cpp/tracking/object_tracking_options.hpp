@@ -60,7 +60,6 @@ struct ObjectTrackingOptions {
   bool final_smoothing = true;
   int smoothing_iterations = 10;     // Ceres iterations of the final smoothing, per track
   int smoothing_frame_observations = 30;  // points join until each frame has this many (0: all)
-  int smoothing_point_span_frames = 20;   // a point's observations split into spans this long
   // non-holonomic prior in the window (optim/heading_cost.hpp), planar-link classes
   bool nonholonomic = true;
   double lateral_sigma_m = 0.02;     // m/frame across the travel axis
@@ -125,7 +124,6 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("final_smoothing", o.final_smoothing, 0, 1);
   visit("smoothing_iterations", o.smoothing_iterations, 1, 1000);
   visit("smoothing_frame_observations", o.smoothing_frame_observations, 0, 1000000);
-  visit("smoothing_point_span_frames", o.smoothing_point_span_frames, 1, 1000000);
   visit("nonholonomic", o.nonholonomic, 0, 1);
   visit("lateral_sigma_m", o.lateral_sigma_m, 1e-4, 100.0);
   visit("travel_min_path_m", o.travel_min_path_m, 0.0, 10000.0);

@@ -117,49 +117,38 @@ bool ObjectTracker::build_window(int c, int first, int rows, const std::map<int,
       w->X_o.push_back(p.X_o);
     }
   } else {
-    // every point the track ever had (retired ones too), in spans of at most
-    // smoothing_point_span_frames frames (each span its own point), the longest first; a span
-    // joins while one of its frames has fewer than smoothing_frame_observations. A car tracked
-    // for 100 frames collects ~2000 points and 18k observations, most of them short-lived and
-    // adding solver time rather than information; a point's errors repeat over the frames
-    // that see it (same texture, sub-pixel phase, slow drift of the match), and its span
-    // bounds how far apart two poses it ties are (the reduced system's band)
-    struct Span {
-      int code;  // i: live point i, -1 - k: retired point k
-      std::vector<objects::ObjectPointObservation> seen;
+    // every point the track ever had (retired ones too), the longest-seen first; a point joins
+    // while one of the frames it was seen in has fewer than smoothing_frame_observations. A car
+    // tracked for 100 frames collects ~2000 points and 18k observations, most of them
+    // short-lived and adding solver time rather than information
+    std::vector<int> order;  // i: live point i, -1 - k: retired point k
+    for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) order.push_back(i);
+    for (int k = 0; k < static_cast<int>(cluster.retired.size()); ++k) order.push_back(-1 - k);
+    auto point = [&](int code) -> const objects::ObjectPoint& {
+      return code >= 0 ? cluster.points[code] : cluster.retired[-1 - code];
     };
-    std::vector<Span> spans;
-    auto add_spans = [&](int code, const objects::ObjectPoint& p) {
-      const int span = std::max(options_.smoothing_point_span_frames, 1);
-      for (const auto& o : p.archive) {
-        if (spans.empty() || spans.back().code != code || o.frame - spans.back().seen.front().frame >= span)
-          spans.push_back({code, {}});
-        spans.back().seen.push_back(o);
-      }
-    };
-    for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) add_spans(i, cluster.points[i]);
-    for (int k = 0; k < static_cast<int>(cluster.retired.size()); ++k) add_spans(-1 - k, cluster.retired[k]);
-    std::stable_sort(spans.begin(), spans.end(),
-                     [](const Span& a, const Span& b) { return a.seen.size() > b.seen.size(); });
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+      return point(a).archive.size() > point(b).archive.size();
+    });
     const int quota = options_.smoothing_frame_observations;
     std::vector<int> per_frame(rows, 0);
-    for (const Span& span : spans) {
+    for (int code : order) {
+      const objects::ObjectPoint& p = point(code);
       if (quota > 0) {
         bool needed = false;
-        for (const auto& o : span.seen) {
+        for (const auto& o : p.archive) {
           const int f = o.frame - first_frame;
           needed |= f >= 0 && f < rows && per_frame[f] < quota;
         }
         if (!needed) continue;
       }
-      const Vec3& X_o = span.code >= 0 ? cluster.points[span.code].X_o : cluster.retired[-1 - span.code].X_o;
       const size_t before = w->observations.size();
-      if (!add_observations(span.seen, first_frame, rows, static_cast<int>(w->X_o.size()), X_o,
+      if (!add_observations(p.archive, first_frame, rows, static_cast<int>(w->X_o.size()), p.X_o,
                             weights_, w, min_depth, &w->observations))
         continue;
       for (size_t e = before; e < w->observations.size(); ++e) ++per_frame[w->observations[e].frame];
-      used->push_back(span.code);
-      w->X_o.push_back(X_o);
+      used->push_back(code);
+      w->X_o.push_back(p.X_o);
     }
   }
   if (options_.nonholonomic && track.link == geometry::LinkType::kPlanar) {

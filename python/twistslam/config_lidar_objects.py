@@ -142,4 +142,8 @@ class LidarObjectsConfig:
         "terms, its keypoints' reprojection sigmas are multiplied by this: a point's stereo and "
         "reprojection errors repeat over the many frames that see it (same texture, same sub-pixel "
         "phase), which the whole track's problem would count as independent, while the boxes and "
-        "the registered scans already carry the motion. MEASURED", "ratio")
+        "the registered scans already carry the motion. Oracle boxes, six simulated sequences "
+        "(before the point quota), RPE_r 0.198 / 0.175 / 0.165 / 0.150 deg/m at 1 / 2 / 3 / 5, "
+        "canonical ATE 0.106 / 0.100 / 0.100 / 0.098 m (online 0.205, 0.089); camera-only "
+        "tracks keep 1: their far cars need the stereo (urban aligned ATE 0.14 at 1, 0.18-0.22 "
+        "at 3)", "ratio")

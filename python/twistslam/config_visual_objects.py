@@ -153,17 +153,20 @@ class VisualObjectsConfig:
         True, "when the run ends, every track is refined once more in one problem: all its rows, "
         "every observation of its points (culled ones too), e_const, e_link, e_head and the "
         "LiDAR terms, camera poses fixed at the refined trajectory (the paper's global BA of the "
-        "object terms; the sliding window sees 8 frames and freezes the rows it leaves). "
-        "result.objects keeps the online poses as T_w_o_online. MEASURED: see docs/visual_objects.md")
-    smoothing_iterations: int = param(10, "Ceres iterations of the final smoothing per track")
+        "object terms; the sliding window sees 8 frames and freezes the rows it leaves, with "
+        "a far car's birth transient in them). result.objects keeps the online poses as "
+        "T_w_o_online; the time is after_loop_ms. Six simulated sequences, online -> smoothed: "
+        "camera only RPE_r 0.256 -> 0.229 deg/m, aligned ATE 0.136 -> 0.092 m (urban 0.19-0.27 "
+        "-> 0.12-0.15); oracle boxes RPE_r 0.205 -> 0.146, canonical ATE 0.089 -> 0.094")
+    smoothing_iterations: int = param(
+        10, "Ceres iterations of the final smoothing per track, from the online poses: 5 left "
+        "crowded s0's oracle-box RPE_r at 0.172 deg/m against 0.143 with 10", "iterations")
     smoothing_frame_observations: int = param(
         30, "the final smoothing takes a track's points longest-seen first, each while one of "
-        "the frames it was seen in has fewer observations than this (0: every point). MEASURED",
-        "observations")
-    smoothing_point_span_frames: int = param(
-        20, "in the final smoothing a point's observations are split into spans of this many "
-        "frames, each its own point: its errors repeat over the frames that see it, and the span "
-        "bounds the band of the reduced system. MEASURED", "frames")
+        "the frames it saw has fewer observations than this (0: every point). A crowded car "
+        "tracked 100 frames has ~2000 points and 18k observations, most short-lived: with 30, "
+        "100-200 points and 3-5k observations, 2x faster and better (crowded s0 oracle boxes "
+        "RPE_r 0.204 -> 0.143 deg/m, aligned ATE 0.047 -> 0.017 m)", "observations")
     nonholonomic: bool = param(
         True, "vehicles (planar-link classes) move along their heading: the window adds "
         "e_head, the measured step across the travel axis learned from the track (not in "
