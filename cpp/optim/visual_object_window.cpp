@@ -120,7 +120,7 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
   if (out.num_residuals == 0) return out;
   detail::SolveOptions so;
   so.max_iterations = o.max_iterations;
-  so.num_threads = std::max(o.num_threads, 1);
+  so.num_threads = 1;  // one thread: bit-for-bit reproducible (Ceres sums in scheduling order)
   // points eliminated; the reduced system of a sliding window's few poses is dense, a whole
   // track's (the final smoothing) is banded by e_const and the points' short lives
   so.linear_solver_override = n <= kDenseSchurMaxFrames ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;

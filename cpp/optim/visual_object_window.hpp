@@ -100,7 +100,6 @@ struct VisualObjectWindowOptions {
   bool use_heading = true;               // e_head where the window has a travel axis
   bool refine_points = true;
   int max_iterations = 5;
-  int num_threads = 1;                   // Ceres threads (the final smoothing runs alone)
   double min_depth = 0.1;                // m
 };
 
