@@ -16,6 +16,10 @@ using namespace twistslam;
 
 namespace {
 
+// Its own suite name: gtest refuses one suite name over two fixture classes (each test file
+// holds its own anonymous-namespace copy of TrackerScene).
+struct SmoothingScene : TrackerScene {};
+
 // A car 28 m ahead driving away and to the side, its stereo matches with 0.3 px of noise.
 void run_noisy_car(tracking::ObjectTracker& tracker, const Car& car, const Background& background,
                    int frames, std::mt19937& noise) {
@@ -55,9 +59,9 @@ std::vector<Mat4> poses_of(const objects::ObjectTrack& track) {
   return out;
 }
 
-TEST_F(TrackerScene, FinalSmoothingBringsAFarCarsStepsCloserToTheTruthAndKeepsTheOnlinePoses) {
+TEST_F(SmoothingScene, FinalSmoothingBringsAFarCarsStepsCloserToTheTruthAndKeepsTheOnlinePoses) {
   constexpr int kFrames = 30;
-  for (unsigned seed : {1u, 2u, 3u}) {
+  for (unsigned seed : {1u, 2u, 3u, 4u}) {
     std::mt19937 noise(seed);
     const Car car = make_car(rng, Vec3(-3, 0.5, 28), Vec3(0.25, 0, 0.6), 0.01);
     auto tracker = make_tracker();
@@ -77,11 +81,12 @@ TEST_F(TrackerScene, FinalSmoothingBringsAFarCarsStepsCloserToTheTruthAndKeepsTh
 
     const auto [t_online, r_online] = step_errors(online, car, 0);
     const auto [t_smooth, r_smooth] = step_errors(poses_of(track), car, 0);
-    // seeds 1-3: online 0.022-0.025 m and 0.032-0.039 deg per step, smoothed 0.009-0.012 m
-    // and 0.012-0.016 deg
-    EXPECT_LT(t_smooth, 0.6 * t_online) << "seed " << seed;
-    EXPECT_LT(r_smooth, 0.6 * r_online) << "seed " << seed;
-    EXPECT_LT(t_smooth, 0.015) << "seed " << seed;  // m per 0.65 m step
+    // seeds 1-6 with the default point quota (30 observations per frame): online
+    // 0.018-0.025 m and 0.025-0.039 deg per step, smoothed 0.010-0.014 m and 0.014-0.020 deg
+    // (ratios 0.46-0.64 and 0.45-0.68)
+    EXPECT_LT(t_smooth, 0.7 * t_online) << "seed " << seed;
+    EXPECT_LT(r_smooth, 0.75 * r_online) << "seed " << seed;
+    EXPECT_LT(t_smooth, 0.016) << "seed " << seed;  // m per 0.65 m step
     EXPECT_LT(r_smooth, 0.025) << "seed " << seed;  // deg per step
 
     // smoothed once: a second call changes nothing
@@ -91,7 +96,7 @@ TEST_F(TrackerScene, FinalSmoothingBringsAFarCarsStepsCloserToTheTruthAndKeepsTh
   }
 }
 
-TEST_F(TrackerScene, WithoutFinalSmoothingNothingIsArchivedOrChanged) {
+TEST_F(SmoothingScene, WithoutFinalSmoothingNothingIsArchivedOrChanged) {
   std::mt19937 noise(7);
   const Car car = make_car(rng, Vec3(-3, 0.5, 28), Vec3(0.25, 0, 0.6), 0.01);
   tracking::ObjectTrackingOptions options;
@@ -107,7 +112,7 @@ TEST_F(TrackerScene, WithoutFinalSmoothingNothingIsArchivedOrChanged) {
   for (size_t r = 0; r < before.size(); ++r) EXPECT_TRUE(tracker.tracks()[0].frames[r].T_w_o == before[r]);
 }
 
-TEST_F(TrackerScene, ATrackWithAFrameWithoutACameraPoseIsLeftOnline) {
+TEST_F(SmoothingScene, ATrackWithAFrameWithoutACameraPoseIsLeftOnline) {
   std::mt19937 noise(8);
   const Car car = make_car(rng, Vec3(-3, 0.5, 28), Vec3(0.25, 0, 0.6), 0.01);
   auto tracker = make_tracker();
@@ -121,7 +126,7 @@ TEST_F(TrackerScene, ATrackWithAFrameWithoutACameraPoseIsLeftOnline) {
 // Points the tracker culls (the car's left half hidden from frame 3 on: found in 3 of the 12
 // frames that predict them, below min_found_ratio) leave the cluster
 // with their observations: the smoothing still uses them for the frames that saw them.
-TEST_F(TrackerScene, CulledPointsRetireWithTheirObservations) {
+TEST_F(SmoothingScene, CulledPointsRetireWithTheirObservations) {
   std::mt19937 noise(9);
   Car car = make_car(rng, Vec3(-3, 0.5, 20), Vec3(0.25, 0, 0.5), 0.0);
   auto tracker = make_tracker();
