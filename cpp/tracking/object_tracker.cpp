@@ -11,6 +11,7 @@
 #include "objects/association.hpp"
 #include "objects/instance_association.hpp"
 #include "objects/motion_model.hpp"
+#include "tracking/instance_pixels.hpp"
 #include "tracking/object_point_helpers.hpp"
 
 namespace twistslam::tracking {
@@ -19,12 +20,6 @@ namespace {
 using detail::contains;
 using detail::observe;
 using detail::transform;
-
-int pixel_value(const cv::Mat& image, const Vec2& uv) {
-  const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
-  if (u < 0 || v < 0 || u >= image.cols || v >= image.rows) return 0;
-  return image.at<int>(v, u);
-}
 
 // Bilinear flow at uv; false where it is missing (NaN) or uv lies outside the image.
 bool flow_at(const cv::Mat& flow, const Vec2& uv, Vec2* out) {
@@ -313,7 +308,13 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   const size_t n = frame.keypoints.size();
   instance_of_keypoint_.assign(n, 0);
   if (!instances.empty())
-    for (size_t i = 0; i < n; ++i) instance_of_keypoint_[i] = pixel_value(instances, frame.keypoints.uv[i]);
+    for (size_t i = 0; i < n; ++i) {
+      const int octave = i < frame.keypoints.octave.size() ? frame.keypoints.octave[i] : 0;
+      const double scale = scale_factors_.empty() ? 1.0
+          : scale_factors_[std::clamp(octave, 0, static_cast<int>(scale_factors_.size()) - 1)];
+      instance_of_keypoint_[i] = instance_at_keypoint(instances, frame.keypoints.uv[i],
+                                                      options_.instance_border_px * scale);
+    }
   claimed_by_.assign(n, -1);
   assigned_instances_.clear();
   std::map<int, objects::LabelVotes> votes;  // instance -> classes of its keypoints

@@ -35,6 +35,9 @@ struct ObjectTrackingOptions {
   bool ground_contact = true;
   int min_contact_columns = 5;      // mask columns with road right below their lowest pixel
   double min_contact_fraction = 0.5; // ... and this fraction of the mask's columns
+  // a keypoint this close (level-0 px, times its level's scale) to another instance's pixel
+  // belongs to neither: its corner and stereo depth may be the occluder's (0: off)
+  double instance_border_px = 3;
   int min_shared_points = 5;        // matched points an instance must share with a cluster
   double min_mask_overlap = 0.5;    // fraction of projected cluster points inside the mask
   int min_inliers = 6;              // inliers of the twist LM for a tracked frame
@@ -99,6 +102,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("min_new_cluster_points", o.min_new_cluster_points, 3, 100000);
   visit("min_new_planar_cluster_points", o.min_new_planar_cluster_points, 3, 100000);
   visit("ground_contact", o.ground_contact, 0, 1);
+  visit("instance_border_px", o.instance_border_px, 0.0, 50.0);
   visit("min_contact_columns", o.min_contact_columns, 1, 100000);
   visit("min_contact_fraction", o.min_contact_fraction, 0.0, 1.0);
   visit("min_shared_points", o.min_shared_points, 1, 100000);
