@@ -202,7 +202,10 @@ def test_tiny_model_overfits_two_simulated_frames(sim_root):
     samples = load_samples([sim_root], ["0000"], TINY)
     torch.manual_seed(0)
     model = SSD3D(TINY)
-    history = train_model(model, samples, epochs=30, batch_size=2, lr=1e-2, augmentation=False)
+    # 40 epochs: the loss still swings by +-1 from epoch to epoch at this learning rate; over
+    # 30 (whose schedule decays sooner) seed 0 ended at first / 2.98, over 40 seeds 0-2 reach
+    # first / 4.1-5.0
+    history = train_model(model, samples, epochs=40, batch_size=2, lr=1e-2, augmentation=False)
     first, last = history[0]["total"], min(h["total"] for h in history[-5:])
     assert last < first / 3
 
