@@ -53,11 +53,15 @@ struct ObjectLidarOptions {
   // the final smoothing of a track with LiDAR terms (boxes, registered scans): its keypoints'
   // reprojection sigmas times this (ObjectTrackingOptions::final_smoothing)
   double smoothing_keypoint_sigma_scale = 5.0;
+  // in a frame with 3D boxes, ObjectTrackingOptions::instance_border_px is this instead (a box
+  // places its car, and a far car's corners along nearer cars are what it has left)
+  double instance_border_px = 0.0;
 };
 
 template <typename Visit>
 void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("use_detections", o.use_detections, 0, 1);
+  visit("instance_border_px", o.instance_border_px, 0.0, 50.0);
   visit("detection_max_distance_m", o.detection_max_distance_m, 0.0, 1000.0);
   visit("detection_min_score", o.detection_min_score, -1e9, 1e9);
   visit("canonical_pose", o.canonical_pose, 0, 1);

@@ -307,13 +307,17 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
     T_c_w_of_frame_.erase(T_c_w_of_frame_.begin());
   const size_t n = frame.keypoints.size();
   instance_of_keypoint_.assign(n, 0);
+  // with 3D boxes a box places its car: the border rule is the LiDAR fusion's own
+  const double border_px = lidar_options_.use_detections && !detections.empty()
+                               ? lidar_options_.instance_border_px
+                               : options_.instance_border_px;
   if (!instances.empty())
     for (size_t i = 0; i < n; ++i) {
       const int octave = i < frame.keypoints.octave.size() ? frame.keypoints.octave[i] : 0;
       const double scale = scale_factors_.empty() ? 1.0
           : scale_factors_[std::clamp(octave, 0, static_cast<int>(scale_factors_.size()) - 1)];
       instance_of_keypoint_[i] = instance_at_keypoint(instances, frame.keypoints.uv[i],
-                                                      options_.instance_border_px * scale);
+                                                      border_px * scale);
     }
   claimed_by_.assign(n, -1);
   assigned_instances_.clear();

@@ -137,6 +137,12 @@ class LidarObjectsConfig:
         "term", "rad/frame")
     huber_reg: float = param(2.0, "a registration to a wrong scan (merged objects) is an "
                              "outlier", "sigmas")
+    instance_border_px: float = param(
+        0.0, "visual_objects.instance_border_px in a frame with 3D boxes: a box places its car, "
+        "and a far car's corners along the nearer cars hiding it are what it has left. Six "
+        "simulated sequences at 3 px against 0: oracle boxes RPE_r 0.146 -> 0.178 deg/m, "
+        "canonical ATE 0.094 -> 0.108 m (urban seed 0: 6/6 -> 4/6 cars); classical boxes ATE "
+        "0.223 -> 0.291 m", "px", lo=0.0, hi=50.0)
     smoothing_keypoint_sigma_scale: float = param(
         5.0, "in the final smoothing (visual_objects.final_smoothing) of a track with LiDAR "
         "terms, its keypoints' reprojection sigmas are multiplied by this: a point's stereo and "

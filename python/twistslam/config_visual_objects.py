@@ -93,7 +93,8 @@ class VisualObjectsConfig:
         "are the nearer object's (not in the paper). 3 px, FAST's circle radius, measured on "
         "six simulated sequences against 0 / 2 / 4: means RPE_r 0.229 -> 0.180 deg/m, aligned "
         "ATE 0.092 -> 0.065 m, ghost tracks 4 -> 1 from 0; 2 and 4 were worse on urban seeds "
-        "0-1 (ghosts 3 and 2, ATE up to 0.22 m); 0: off", "px", lo=0.0, hi=50.0)
+        "0-1 (ghosts 3 and 2, ATE up to 0.22 m); 0: off. Frames with 3D boxes use "
+        "lidar_objects.instance_border_px", "px", lo=0.0, hi=50.0)
     min_contact_columns: int = param(
         5, "mask columns whose lowest pixel has road right below it, for a ground-contact "
         "depth", "columns", lo=1)

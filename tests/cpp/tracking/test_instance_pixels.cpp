@@ -50,11 +50,23 @@ struct OccludedCarScene : TrackerScene {
   static constexpr int kFar = 3, kNear = 4;
   static constexpr double kNearDepth = 14.0;
 
-  // The first frame's cluster origin of the far car (NaN z when no cluster started).
-  Vec3 far_cluster_origin(double instance_border_px) {
+  // The first frame's cluster origin of the far car (NaN z when no cluster started); with_box:
+  // the frame comes with a 3D box (of another class, far to the side: it places nothing).
+  Vec3 far_cluster_origin(double instance_border_px, bool with_box = false,
+                          double lidar_border_px = 0.0) {
     tracking::ObjectTrackingOptions options;
     options.instance_border_px = instance_border_px;
-    auto tracker = make_tracker(options);
+    tracking::ObjectLidarOptions lidar;
+    lidar.instance_border_px = lidar_border_px;
+    auto tracker = make_tracker(options, lidar);
+    std::vector<objects::Detection> boxes;
+    if (with_box) {
+      objects::Detection d;
+      d.box.center = Vec3(-20, 0.8, 40);
+      d.box.length = 4, d.box.width = 1.8, d.box.height = 1.5;
+      d.score = 1, d.class_id = 99;
+      boxes.push_back(d);
+    }
     const Car far = make_car(rng, Vec3(0, -0.2, 35), Vec3(0, 0, 0.5), 0.0);
     SceneFrame f(0);
     double v_bottom = -1e9;
@@ -79,7 +91,7 @@ struct OccludedCarScene : TrackerScene {
       f.add_point(kCamera.backproject(uv, kNearDepth), random_descriptor(rng), kCar, 0);
     }
     f.add_background(background);
-    tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+    tracker.track(f.finish(), f.instances, cv::Mat(), kUp, cv::Mat(), Vec4::Zero(), boxes);
     for (const auto& track : tracker.tracks())
       if (!track.frames.empty()) return track.frames[0].T_w_o.topRightCorner<3, 1>();
     return Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -92,6 +104,12 @@ TEST_F(OccludedCarScene, CornersOnTheOccludersRoofDoNotPullTheFarCarsClusterNear
   // its 8 stereo points put it at 35 +- 0.9 m; the 12 roof corners, counted, at ~14 m
   EXPECT_NEAR(with_border.z(), 35.0, 1.0);
   EXPECT_LT(without.z(), 20.0);
+}
+
+TEST_F(OccludedCarScene, AFrameWithBoxesUsesTheLidarFusionsBorder) {
+  // lidar_objects.instance_border_px (0 by default) replaces it in a frame with 3D boxes
+  EXPECT_LT(far_cluster_origin(3.0, /*with_box=*/true).z(), 20.0);
+  EXPECT_NEAR(far_cluster_origin(0.0, /*with_box=*/true, /*lidar_border_px=*/3.0).z(), 35.0, 1.0);
 }
 
 }  // namespace
