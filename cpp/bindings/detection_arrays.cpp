@@ -9,7 +9,8 @@ std::vector<objects::Detection> detections_from_arrays(const py::handle& boxes,
                                                        const py::handle& scores,
                                                        const py::handle& class_ids,
                                                        const py::handle& planar,
-                                                       const py::handle& open_ends) {
+                                                       const py::handle& open_ends,
+                                                       const py::handle& point_extents) {
   const DoubleArray b = as_rows(boxes, "boxes", 7);
   const auto n = b.shape(0);
   const DoubleArray s = as_double_array(scores, "scores");
@@ -34,12 +35,21 @@ std::vector<objects::Detection> detections_from_arrays(const py::handle& boxes,
       throw py::value_error("open_ends: expected (" + std::to_string(n) + ",) like boxes, got " +
                             shape_string(ends));
   }
+  py::array_t<bool, py::array::c_style | py::array::forcecast> extents;
+  if (!point_extents.is_none()) {
+    extents = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(point_extents);
+    if (!extents) throw py::type_error("point_extents: expected a boolean array");
+    if (extents.ndim() != 1 || extents.shape(0) != n)
+      throw py::value_error("point_extents: expected (" + std::to_string(n) + ",) like boxes, got " +
+                            shape_string(extents));
+  }
   std::vector<objects::Detection> dets(n);
   for (py::ssize_t i = 0; i < n; ++i) {
     dets[i].box = geometry::Box3D::from_row(b.data() + 7 * i);
     dets[i].score = s.data()[i];
     dets[i].class_id = static_cast<int>(c.data()[i]);
     dets[i].planar = planar.is_none() ? true : p.data()[i];
+    dets[i].point_extent = point_extents.is_none() ? false : extents.data()[i];
     if (!open_ends.is_none()) {
       const std::int64_t e = ends.data()[i];
       if (e < -1 || e > 1)

@@ -95,11 +95,13 @@ options : dict
            [](t::System& s, int index, double timestamp, const py::array& left, const py::array& right,
               const py::object& labels, const py::object& points_c, const py::object& instances,
               const py::object& flow, const py::object& boxes, const py::object& scores,
-              const py::object& class_ids, const py::object& open_ends) {
+              const py::object& class_ids, const py::object& open_ends,
+              const py::object& point_extents) {
              const cv::Mat l = image_view(left, "image_left", false);
              std::vector<objects::Detection> detections;
              if (!boxes.is_none())
-               detections = detections_from_arrays(boxes, scores, class_ids, py::none(), open_ends);
+               detections = detections_from_arrays(boxes, scores, class_ids, py::none(), open_ends,
+                                                   point_extents);
              Points3 scan;
              if (!points_c.is_none()) scan = points_view(as_rows(points_c, "points_c", 3));
              const cv::Mat r = image_view(right, "image_right", false);
@@ -134,7 +136,7 @@ options : dict
            "index"_a, "timestamp"_a, "image_left"_a, "image_right"_a, "labels"_a = py::none(),
            "points_c"_a = py::none(), "instances"_a = py::none(), "flow"_a = py::none(),
            "boxes"_a = py::none(), "scores"_a = py::none(), "class_ids"_a = py::none(),
-           "open_ends"_a = py::none(), R"doc(Track one stereo frame.
+           "open_ends"_a = py::none(), "point_extents"_a = py::none(), R"doc(Track one stereo frame.
 
 Parameters
 ----------
@@ -163,6 +165,10 @@ boxes : ndarray (N, 7) float, optional
 open_ends : ndarray (N,) int, optional
     Per box, 0 for a measured length, +1 / -1 for a partly seen car whose prior length runs
     from its seen face to the box's +x / -x end (``Detections3D.open_end``); None: all 0.
+point_extents : ndarray (N,) bool, optional
+    Per box, true when it is the tight extent of its LiDAR points (the classical detector:
+    ``Detections3D.point_extent``): its measured length is a lower bound and its end nearer
+    the sensor the seen one; None: all false.
 
 Returns
 -------

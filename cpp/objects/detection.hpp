@@ -13,6 +13,9 @@ struct Detection {
   // 0: the box's length was measured (or unknown); +1 / -1: a partly seen car, its length the
   // detector's prior laid from the seen face towards the box's +x / -x end (x: the heading)
   int open_end = 0;
+  // the box is the tight extent of its LiDAR points (the classical detector): a measured length
+  // is a lower bound, and the box's end nearer the sensor is the seen one
+  bool point_extent = false;
 };
 
 }  // namespace twistslam::objects

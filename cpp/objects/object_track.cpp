@@ -1,8 +1,22 @@
 #include "objects/object_track.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace twistslam::objects {
+namespace {
+
+// The q quantile of values (0 <= q <= 1), interpolated between order statistics as numpy's
+// default: q = 0.5 is the median (the mean of the middle two of an even count).
+double quantile(std::vector<double> values, double q) {
+  std::sort(values.begin(), values.end());
+  const double at = std::clamp(q, 0.0, 1.0) * static_cast<double>(values.size() - 1);
+  const size_t below = static_cast<size_t>(std::floor(at));
+  const size_t above = std::min(below + 1, values.size() - 1);
+  return values[below] + (at - static_cast<double>(below)) * (values[above] - values[below]);
+}
+
+}  // namespace
 
 const char* to_string(TrackState state) {
   switch (state) {
@@ -39,11 +53,15 @@ double ObjectTrack::confidence() const {
   return n ? sum / n : 0.0;
 }
 
-void ObjectTrack::update_size() {
+void ObjectTrack::update_size(double bound_quantile) {
   // a partly seen car's box has the prior's length (KITTI's cars: 3.4-5.2 m): where other
   // frames measured the length, only those give it
-  bool any_measured = false;
-  for (const auto& f : frames) any_measured |= f.has_detection() && f.open_end_w.isZero();
+  bool any_measured = false, all_bounds = true;
+  for (const auto& f : frames) {
+    if (!f.has_detection() || !f.open_end_w.isZero()) continue;
+    any_measured = true;
+    all_bounds &= !f.far_end_w.isZero();
+  }
   std::vector<double> dim;
   for (int d = 0; d < 3; ++d) {
     dim.clear();
@@ -52,21 +70,21 @@ void ObjectTrack::update_size() {
         dim.push_back(f.detected_size[d]);
     }
     if (dim.empty()) continue;
-    // the median, as the paper fuses sizes: robust to a few truncated / merged detections
-    const size_t mid = dim.size() / 2;
-    std::nth_element(dim.begin(), dim.begin() + mid, dim.end());
-    double median = dim[mid];
-    if (dim.size() % 2 == 0) {
-      median = 0.5 * (median + *std::max_element(dim.begin(), dim.begin() + mid));
-    }
-    size[d] = median;
+    // the median, as the paper fuses sizes: robust to a few truncated / merged detections;
+    // a point extent's length only ever falls short of the car's (the far end of its side
+    // returns few points): an upper quantile of those
+    const bool bounds = d == 0 && any_measured && all_bounds;
+    size[d] = quantile(dim, bounds ? bound_quantile : 0.5);
   }
-  // the seen face stays, the prior's end moves to the track's length: the centre moves by
-  // half the difference (a rear-only box of a 4.8 m car was 0.4 m too near with the 4.0 prior)
+  // the seen face stays, the prior's (or the thinned-out) end moves to the track's length: the
+  // centre moves by half the difference (a rear-only box of a 4.8 m car was 0.4 m too near
+  // with the 4.0 prior)
   for (auto& f : frames) {
-    if (!f.has_detection() || f.open_end_w.isZero()) continue;
+    if (!f.has_detection()) continue;
+    const Vec3& end_w = f.open_end_w.isZero() ? f.far_end_w : f.open_end_w;
+    if (end_w.isZero()) continue;
     const double shift = 0.5 * (size[0] - f.detected_size[0]);
-    f.T_w_o_detected.topRightCorner<3, 1>() += (shift - f.open_shift_m) * f.open_end_w;
+    f.T_w_o_detected.topRightCorner<3, 1>() += (shift - f.open_shift_m) * end_w;
     f.open_shift_m = shift;
   }
 }

@@ -41,6 +41,11 @@ struct TrackFrame {
   // moved that way to put that end at the track's length (update_size)
   Vec3 open_end_w = Vec3::Zero();
   double open_shift_m = 0;
+  // a box that is the tight extent of its LiDAR points (Detection::point_extent) and measured
+  // its length: the direction in w from its seen end (the one nearer the sensor) to its far
+  // end, whose side returns thin out, so the length is a lower bound (zero otherwise). It
+  // moves along it as an open end does (open_shift_m).
+  Vec3 far_end_w = Vec3::Zero();
   bool reported = false;          // part of the output (set by the tracker's output policy)
   // LiDAR registration (eq. 6-7): the object's motion in w from the previous frame to this
   // one, T_w_o(this) = M_w_registered T_w_o(previous), measured by GICP of the object scans
@@ -91,9 +96,11 @@ struct ObjectTrack {
   // Track confidence: mean range-corrected score of the associated detections (0 without any).
   double confidence() const;
   // Recomputes `size` as the per-dimension median over the detected frames (the length over
-  // those whose length was measured, if any), then moves every box whose length is the prior
-  // along its open end so that this end lies at the track's length from its seen face.
-  void update_size();
+  // those whose length was measured, if any; when every one of those is a point extent's lower
+  // bound, their `bound_quantile` quantile instead), then moves every box whose length is the
+  // prior along its open end, and every point extent along its far end, so that this end lies
+  // at the track's length from its seen face.
+  void update_size(double bound_quantile = 0.5);
 };
 
 }  // namespace twistslam::objects

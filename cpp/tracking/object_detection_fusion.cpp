@@ -74,6 +74,13 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
   detection_used_[d] = 1;
   Mat4 T_w_box = geometry::se3_inverse(frame.T_c_w) * det.box.pose();
   const Vec3 open_end_w = static_cast<double>(det.open_end) * T_w_box.block<3, 1>(0, 0);  // before any turn
+  // a point extent that measured its length: its far end is the one away from the camera
+  Vec3 far_end_w = Vec3::Zero();
+  if (lidar_options_.point_extent_lengths && det.point_extent && det.open_end == 0) {
+    const Vec3 axis_w = T_w_box.block<3, 1>(0, 0);
+    const Vec3 camera_to_box_w = T_w_box.topRightCorner<3, 1>() - geometry::se3_inverse(frame.T_c_w).topRightCorner<3, 1>();
+    far_end_w = axis_w.dot(camera_to_box_w) >= 0 ? axis_w : Vec3(-axis_w);
+  }
   if (!track.canonical && lidar_options_.canonical_pose) {
     make_canonical(c, T_w_box);
     track.canonical_frame = row.frame;
@@ -107,13 +114,14 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
   row.T_w_o_detected = T_w_box;
   row.detected_size = Vec3(det.box.length, det.box.width, det.box.height);
   row.open_end_w = open_end_w;
+  row.far_end_w = far_end_w;
   row.open_shift_m = 0;
   row.score = det.score;
   row.confidence = det.score;
   row.range = det.box.center.norm();
   row.detection_index = d;  // before the heading check: a turn turns this frame's box too
   if (track.canonical && !track.heading_from_motion) check_heading_from_motion(c);
-  track.update_size();
+  track.update_size(lidar_options_.point_extent_length_quantile);
   if (track.canonical_frame != row.frame) refine_canonical(c);
 }
 

@@ -23,6 +23,10 @@ struct ObjectLidarOptions {
   // a track whose origin lies in another's box (grown by this) this frame and that has fewer
   // boxes is not reported in it (two clusters on one car); < 0: never
   double duplicate_margin_m = 0.3;
+  // point-extent boxes (Detection::point_extent) laid from their near end, the car's length
+  // from this quantile of theirs (off: every box as an estimate, the median length)
+  bool point_extent_lengths = false;
+  double point_extent_length_quantile = 0.9;
   // e_det and the detection pose prior in the object window (optim/visual_object_window.hpp)
   bool use_detection_twist = true;
   double det_sigma_translation = 0.2;      // m/frame
@@ -73,6 +77,8 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("refine_min_agreement", o.refine_min_agreement, 0.0, 1.0);
   visit("refine_min_boxes", o.refine_min_boxes, 2, 1000000);
   visit("duplicate_margin_m", o.duplicate_margin_m, -1.0, 10.0);
+  visit("point_extent_lengths", o.point_extent_lengths, 0, 1);
+  visit("point_extent_length_quantile", o.point_extent_length_quantile, 0.0, 1.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);
   visit("det_sigma_translation", o.det_sigma_translation, 1e-6, 100.0);
   visit("det_sigma_rotation", o.det_sigma_rotation, 1e-6, 10.0);

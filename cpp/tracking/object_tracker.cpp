@@ -65,6 +65,11 @@ void ObjectTracker::reset() {
   last_frame_ = -1;
 }
 
+double ObjectTracker::level_scale(int octave) const {
+  if (scale_factors_.empty()) return 1.0;
+  return scale_factors_[std::clamp(octave, 0, static_cast<int>(scale_factors_.size()) - 1)];
+}
+
 objects::TwistObservation ObjectTracker::observation(const objects::ObjectPoint& p,
                                                      const Frame& frame, int k) const {
   objects::TwistObservation o;
@@ -104,8 +109,7 @@ std::vector<ObjectTracker::Match> ObjectTracker::search_cluster(
     } else {
       continue;
     }
-    const double scale =
-        scale_factors_[std::min<size_t>(std::max(p.last.octave, 0), scale_factors_.size() - 1)];
+    const double scale = level_scale(p.last.octave);
     frame.grid.query(predicted.x(), predicted.y(), radius * scale, &candidates);
     // the flow has already located the point: a looser descriptor test only rejects
     // keypoints of other surfaces inside the small window
@@ -151,8 +155,7 @@ void ObjectTracker::refine_matches(const objects::ObjectCluster& cluster, const 
     if (X_c.z() <= 0.1) continue;
     const Vec2 uv = camera_.project(X_c);
     if (!camera_.in_image(uv)) continue;
-    const double scale =
-        scale_factors_[std::min<size_t>(std::max(p.last.octave, 0), scale_factors_.size() - 1)];
+    const double scale = level_scale(p.last.octave);
     frame.grid.query(uv.x(), uv.y(), options_.refine_radius_px * scale, &candidates);
     int best = -1, best_distance = options_.max_hamming + 1;
     for (int k : candidates) {
@@ -313,9 +316,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
                                : options_.instance_border_px;
   if (!instances.empty())
     for (size_t i = 0; i < n; ++i) {
-      const int octave = i < frame.keypoints.octave.size() ? frame.keypoints.octave[i] : 0;
-      const double scale = scale_factors_.empty() ? 1.0
-          : scale_factors_[std::clamp(octave, 0, static_cast<int>(scale_factors_.size()) - 1)];
+      const double scale = level_scale(i < frame.keypoints.octave.size() ? frame.keypoints.octave[i] : 0);
       instance_of_keypoint_[i] = instance_at_keypoint(instances, frame.keypoints.uv[i],
                                                       border_px * scale);
     }

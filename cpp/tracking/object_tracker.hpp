@@ -195,6 +195,8 @@ class ObjectTracker : public ObjectBundleTerms {
   void recenter(int c);
   objects::TwistObservation observation(const objects::ObjectPoint& p, const Frame& frame,
                                         int keypoint) const;
+  // Pyramid scale of an octave (level px -> image px), clamped to the pyramid; 1 without one.
+  double level_scale(int octave) const;
 
   geometry::StereoCamera camera_;
   ObjectTrackingOptions options_;

@@ -67,6 +67,23 @@ class LidarObjectsConfig:
         "the car). A box's centre scatters by 0.1-0.3 m; cars side by side are >= 1.8 m apart "
         "centre to centre, so a 0.3 m margin never joins two cars. Oracle urban s1: a 2-box "
         "duplicate track turned by 170 deg was the car's main track. < 0: never", "m")
+    point_extent_lengths: bool = param(
+        False, "boxes that are the tight extent of their points (Detections3D.point_extent, "
+        "the classical detector) are laid from their end nearer the sensor, the car's length "
+        "from point_extent_length_quantile of theirs: right where the ground truth boxes are "
+        "the cars' full bodies (the simulator's mesh bounds), whose far ends a LiDAR sees "
+        "thinly. Off by default because KITTI's labels are drawn on the points: on real 0001 "
+        "the classical boxes' lengths exceed the labels (3.8-4.1 m for a 3.77 m label), and "
+        "laying them from the near end put their centres 0.087 -> 0.149 m off even with the "
+        "label's length. Six simulated sequences with the classical detector: canonical ATE "
+        "0.223 -> 0.189 m, 3D MOTP 84.3 -> 85.9 %, RPE_r 0.154 -> 0.164 deg/m; real 0001: "
+        "ATE 0.226 -> 0.242 m")
+    point_extent_length_quantile: float = param(
+        0.9, "with point_extent_lengths, a car's length is this quantile of its point extents' "
+        "measured lengths (they only fall short of the body: the far end of its side returns "
+        "few points). Classical detector on urban s0-s1 and crowded s0, s2 (64 cars): length "
+        "error -0.16 m mean / 0.20 m absolute at 0.5 (the median), -0.08 / 0.14 at 0.75, "
+        "-0.01 / 0.10 at 0.9, +0.03 / 0.11 at 1.0 (the longest)", "quantile", lo=0.0, hi=1.0)
     use_detection_twist: bool = param(True, "e_det (eq. 9) in the object window")
     det_sigma_translation: float = param(
         0.2, "twist between two boxes: LiDAR box centres scatter by ~0.1-0.15 m (the simulator's "

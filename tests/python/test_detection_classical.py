@@ -110,6 +110,7 @@ def test_boxes_follow_the_detections3d_contract(sim_sequence):
     assert set(dets.classes) <= {"Car", "Pedestrian", "Cyclist"}
     assert np.all((dets.boxes[:, 6] >= -np.pi / 2) & (dets.boxes[:, 6] < np.pi / 2))
     assert np.all(dets.boxes[:, 2] > 0)  # front_only: the camera's field of view
+    assert dets.point_extent.all()  # rectangles around their points: lengths are lower bounds
     # open_end: a prior-length car's unseen end; a measured one has none
     assert dets.open_end.dtype == np.int8 and set(dets.open_end.tolist()) <= {-1, 0, 1}
     assert np.all(dets.open_end[dets.classes != "Car"] == 0)
@@ -136,6 +137,16 @@ def test_detections3d_refuses_bad_open_ends():
         Detections3D(box, [1.0], ["Car"], open_end=[0, 1])
     assert Detections3D(box, [1.0], ["Car"]).open_end.tolist() == [0]  # files: none known
     assert Detections3D(box, [1.0], ["Car"], open_end=[-1]).select([0]).open_end.tolist() == [-1]
+
+
+def test_detections3d_point_extent_defaults_to_estimates_and_is_checked():
+    box = [[0.0, 1.0, 10.0, 4.0, 1.8, 1.5, 0.0]]
+    assert Detections3D(box, [1.0], ["Car"]).point_extent.tolist() == [False]  # files, 3DSSD
+    assert Detections3D(box, [1.0], ["Car"], point_extent=[True]).select([0]).point_extent.tolist() == [True]
+    with pytest.raises(ValueError, match="point_extent"):
+        Detections3D(box, [1.0], ["Car"], point_extent=[True, False])
+    with pytest.raises(ValueError, match="point_extent"):
+        Detections3D(box, [1.0], ["Car"], point_extent=["yes"])
 
 
 def test_empty_and_nan_scans():

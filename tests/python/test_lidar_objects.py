@@ -67,10 +67,12 @@ def test_detections_give_the_car_ahead_its_canonical_pose_and_size(sim):
 
 def test_detection_classes_map_to_the_panoptic_vocabulary():
     dets = Detections3D(np.tile([0.0, 1.0, 10.0, 4.0, 1.8, 1.5, 0.0], (3, 1)), [3.0, 2.0, 1.0],
-                        ["Car", "Misc", "Van"], open_end=[1, 0, -1])
-    boxes, scores, class_ids, open_ends = _detection_arrays(dets)
+                        ["Car", "Misc", "Van"], open_end=[1, 0, -1],
+                        point_extent=[True, False, False])
+    boxes, scores, class_ids, open_ends, point_extents = _detection_arrays(dets)
     assert class_ids.tolist() == [26, 26] and scores.tolist() == [3.0, 1.0]
     assert boxes.shape == (2, 7) and open_ends.tolist() == [1, -1]
+    assert point_extents.tolist() == [True, False]
     with pytest.raises(TypeError, match="Detections3D"):
         _detection_arrays(np.zeros((1, 7)))
 

@@ -41,12 +41,19 @@ class Detections3D:
         laid from its seen face towards the box's +x / -x end (x along ``yaw``'s heading);
         the LiDAR fusion moves such a box's centre that way once other frames measured the
         car's length (the classical detector sets it).
+    point_extent : (N,) bool, optional. True: the box is the tight extent of its LiDAR points
+        (the classical detector), so a measured length is a lower bound (the far end of a
+        car's side returns few points) and the box's end nearer the sensor is the seen one;
+        the LiDAR fusion then takes a car's length from an upper quantile of its boxes and
+        lays each box from its near end (``lidar_objects.point_extent_length_quantile``).
+        False (default; files, 3DSSD): the length is the detector's estimate.
     """
 
     boxes: np.ndarray = field(default_factory=lambda: np.zeros((0, 7)))
     scores: np.ndarray = field(default_factory=lambda: np.zeros(0))
     classes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=object))
     open_end: np.ndarray | None = None
+    point_extent: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.boxes = np.asarray(self.boxes, dtype=np.float64).reshape(-1, 7)
@@ -65,6 +72,13 @@ class Detections3D:
             raise ValueError(f"Detections3D: open_end must hold {n} values in {{-1, 0, 1}}, "
                              f"got {open_end.tolist()}")
         self.open_end = open_end.astype(np.int8)
+        if self.point_extent is None:
+            self.point_extent = np.zeros(n, dtype=bool)
+        point_extent = np.asarray(self.point_extent).reshape(-1)
+        if len(point_extent) != n or point_extent.dtype.kind not in "bui":
+            raise ValueError(f"Detections3D: point_extent must hold {n} booleans, got "
+                             f"{point_extent.tolist()}")
+        self.point_extent = point_extent.astype(bool)
 
     def __len__(self) -> int:
         return len(self.boxes)
@@ -72,7 +86,8 @@ class Detections3D:
     def select(self, mask_or_index) -> "Detections3D":
         """The detections picked by a boolean mask or an index array."""
         return Detections3D(self.boxes[mask_or_index], self.scores[mask_or_index],
-                            self.classes[mask_or_index], self.open_end[mask_or_index])
+                            self.classes[mask_or_index], self.open_end[mask_or_index],
+                            self.point_extent[mask_or_index])
 
     @classmethod
     def from_table(cls, table: "ObjectTable") -> "Detections3D":

@@ -61,8 +61,9 @@ class ClassicalDetector:
         out = _d.detect(points_c, self.options)
         box_keys = ("boxes", "scores", "classes", "open_end")
         self.last_stats = {k: v for k, v in out.items() if k not in box_keys}
+        # every box is the rectangle around its cluster's points: a lower bound of the object
         return Detections3D(out["boxes"], out["scores"], np.asarray(out["classes"], dtype=object),
-                            out["open_end"])
+                            out["open_end"], np.ones(len(out["boxes"]), dtype=bool))
 
     def __call__(self, frame) -> Detections3D:
         if frame.points_c is None:

@@ -1,7 +1,10 @@
 // A track's size (objects/object_track.hpp, update_size): the per-dimension median of its
 // boxes, the length from the boxes that measured it when some did, and the boxes whose length
-// is the detector's prior moved along their open end to that length (their seen face stays).
+// is the detector's prior moved along their open end to that length (their seen face stays);
+// boxes that are their points' extent take an upper quantile and keep their near end.
 #include <gtest/gtest.h>
+
+#include <vector>
 
 #include "objects/object_track.hpp"
 
@@ -54,4 +57,37 @@ TEST(TrackSize, OnlyPriorBoxesKeepThePriorAndTheirCentres) {
   EXPECT_NEAR(track.size[0], 3.6, 1e-9);
   EXPECT_NEAR(track.frames[0].T_w_o_detected(0, 3), 5.2, 1e-9);  // towards the seen face (+x)
   EXPECT_NEAR(track.size[1], 1.7, 1e-9);  // width and height from every box
+}
+
+TEST(TrackSize, PointExtentsGiveAnUpperQuantileAndKeepTheirNearEnd) {
+  // a car heading along +x, seen from -x: its boxes are the extents of its points, their near
+  // (rear) face at x = 7.7 measured, their far end short by what the side's returns missed
+  const double rear_face = 7.7;
+  const std::vector<double> lengths{4.1, 4.55, 4.3, 4.6, 4.5};
+  ObjectTrack track;
+  for (size_t k = 0; k < lengths.size(); ++k) {
+    TrackFrame f = box_row(static_cast<int>(k), rear_face + 0.5 * lengths[k], lengths[k], 0);
+    f.far_end_w = Vec3::UnitX();
+    track.frames.push_back(f);
+  }
+  track.update_size(0.5);  // the paper's median
+  EXPECT_NEAR(track.size[0], 4.5, 1e-9);
+  track.update_size(0.9);  // sorted 4.1 4.3 4.5 4.55 4.6: 0.9 lies at 3.6 -> 4.55 + 0.6 x 0.05
+  EXPECT_NEAR(track.size[0], 4.58, 1e-9);
+  for (const TrackFrame& f : track.frames)  // every box now spans 7.7 .. 12.28
+    EXPECT_NEAR(f.T_w_o_detected(0, 3), rear_face + 0.5 * 4.58, 1e-9) << "frame " << f.frame;
+  EXPECT_NEAR(track.size[1], 1.7, 1e-9);  // width and height: the median still
+}
+
+TEST(TrackSize, EstimatedLengthsAmongPointExtentsKeepTheMedian) {
+  // a detector's estimate is no lower bound: with one among the measured boxes, the median
+  ObjectTrack track;
+  track.frames.push_back(box_row(0, 10.0, 4.0, 0));
+  track.frames.push_back(box_row(1, 10.0, 4.4, 0));
+  track.frames.push_back(box_row(2, 10.0, 4.8, 0));
+  track.frames[0].far_end_w = track.frames[1].far_end_w = Vec3::UnitX();
+  track.update_size(0.9);
+  EXPECT_NEAR(track.size[0], 4.4, 1e-9);
+  EXPECT_NEAR(track.frames[2].T_w_o_detected(0, 3), 10.0, 1e-9);  // an estimate does not move
+  EXPECT_NEAR(track.frames[0].T_w_o_detected(0, 3), 10.2, 1e-9);  // a point extent grows forward
 }

@@ -80,6 +80,11 @@ struct Boxes {
   // frames from quarter_from to quarter_to (excluded): the box is a quarter turn off, its
   // length the detector's prior (open_end set), as a partly hidden L-shape read as a rear
   int quarter_from = -1, quarter_to = -1;
+  // > 0: each box is the extent of its points, as the classical detector's: its far end
+  // (away from the camera) falls short by |N(0, this)| m, its near end stays;
+  // point_extent says so to the tracker (Detection::point_extent)
+  double far_end_shortfall_m = 0;
+  bool point_extent = false;
 };
 
 void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Background& background,
@@ -99,6 +104,15 @@ void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Back
                                                (first ? boxes.first_yaw : 0),
                               boxes.offset + noise + (first ? boxes.first_offset : Vec3::Zero()),
                               boxes.class_id));
+      if (boxes.far_end_shortfall_m > 0) {
+        objects::Detection& d = dets.back();
+        const Vec3 axis = car.pose(i).topLeftCorner<3, 1>();
+        const Vec3 far_end = axis.dot(d.box.center) >= 0 ? axis : Vec3(-axis);
+        const double shortfall = std::abs(boxes.far_end_shortfall_m * unit(rng));
+        d.box.length -= shortfall;
+        d.box.center -= 0.5 * shortfall * far_end;
+        d.point_extent = boxes.point_extent;
+      }
       if (i >= boxes.quarter_from && i < boxes.quarter_to) {
         dets.back().box.yaw += M_PI / 2;
         dets.back().open_end = 1;
@@ -162,6 +176,35 @@ TEST_F(DetectionFusion, FirstBoxSetsTheCanonicalFrameAndTheBoxesTheSize) {
   EXPECT_NEAR(track.size.y(), kWidth, 0.1);
   EXPECT_NEAR(track.size.z(), kHeight, 0.1);
   expect_motion(track, car, 0);
+}
+
+TEST_F(DetectionFusion, PointExtentBoxesGiveTheCarsLengthFromTheirNearEnd) {
+  // boxes short at their far end by 0-0.6 m (median 0.2), as LiDAR returns thin out along a
+  // car's side: with point_extent_lengths the track takes an upper quantile of their lengths
+  // and lays each from its near end; without it (the default) they are estimates: the median
+  // length, centres as given, and the track ends short and near
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0.1), 0.02);
+  Boxes boxes;
+  boxes.far_end_shortfall_m = 0.3;
+  boxes.point_extent = true;
+  std::vector<tracking::ObjectTrackingReport> reports;
+  tracking::ObjectLidarOptions lidar;
+  lidar.point_extent_lengths = true;
+  auto extents = make_tracker({}, lidar);
+  run_with_boxes(extents, car, background, 20, boxes, rng, &reports);
+  ASSERT_EQ(extents.tracks().size(), 1u);
+  const objects::ObjectTrack& track = extents.tracks()[0];
+  EXPECT_NEAR(track.size.x(), kLength, 0.1);
+  expect_canonical(track, extents.clusters()[0], car, 0.06);
+
+  auto estimates = track_one_car(car, boxes, 20);  // default options
+  ASSERT_EQ(estimates.tracks().size(), 1u);
+  EXPECT_LT(estimates.tracks()[0].size.x(), kLength - 0.1);
+  const Mat4 truth = car.pose(track.last().frame);
+  ASSERT_EQ(estimates.tracks()[0].last().frame, track.last().frame);
+  const double off = (estimates.tracks()[0].last().T_w_o.topRightCorner<3, 1>() - truth.topRightCorner<3, 1>()).norm();
+  const double off_extents = (track.last().T_w_o.topRightCorner<3, 1>() - truth.topRightCorner<3, 1>()).norm();
+  EXPECT_GT(off, off_extents + 0.03) << "estimates " << off << " m, point extents " << off_extents << " m";
 }
 
 TEST_F(DetectionFusion, BoxesPlaceTheRowsBeforeTheFirstBox) {
