@@ -37,8 +37,12 @@ std::vector<objects::Detection> detections_from_arrays(const py::handle& boxes,
   }
   py::array_t<bool, py::array::c_style | py::array::forcecast> extents;
   if (!point_extents.is_none()) {
-    extents = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(point_extents);
-    if (!extents) throw py::type_error("point_extents: expected a boolean array");
+    // booleans only: a cast would read any non-empty string or non-zero number as true
+    const py::array raw = py::array::ensure(point_extents);
+    if (!raw || raw.dtype().kind() != 'b')
+      throw py::type_error("point_extents: expected a boolean array, got " +
+                           (raw ? std::string(py::str(raw.dtype())) : std::string("no array")));
+    extents = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(raw);
     if (extents.ndim() != 1 || extents.shape(0) != n)
       throw py::value_error("point_extents: expected (" + std::to_string(n) + ",) like boxes, got " +
                             shape_string(extents));

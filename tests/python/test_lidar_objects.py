@@ -111,3 +111,9 @@ def test_bad_open_ends_are_refused_at_the_slam_binding():
         with pytest.raises(ValueError, match=message):
             system.track(0, 0.0, image, image, None, None, None, None, boxes, np.ones(1),
                          np.array([26]), np.array(open_ends))
+    for point_extents, error, message in (
+            ([True, False], ValueError, r"point_extents: expected \(1,\)"),
+            (["yes"], TypeError, "point_extents: expected a boolean array")):
+        with pytest.raises(error, match=message):
+            system.track(0, 0.0, image, image, None, None, None, None, boxes, np.ones(1),
+                         np.array([26]), np.zeros(1, np.int64), np.array(point_extents))

@@ -51,7 +51,7 @@ class FakeSystem:
 
     def track(self, index, timestamp, image_left, image_right, labels, points_c=None,
               instances=None, flow=None, boxes=None, scores=None, class_ids=None,
-              open_ends=None):
+              open_ends=None, point_extents=None):
         self.calls.append(dict(index=index, timestamp=timestamp, shape=image_left.shape,
                                labels=None if labels is None else labels.copy(),
                                points_c=None if points_c is None else points_c.shape,
@@ -59,7 +59,9 @@ class FakeSystem:
                                flow=None if flow is None else flow.shape,
                                boxes=None if boxes is None else np.array(boxes),
                                class_ids=None if class_ids is None else np.array(class_ids),
-                               open_ends=None if open_ends is None else np.array(open_ends)))
+                               open_ends=None if open_ends is None else np.array(open_ends),
+                               point_extents=None if point_extents is None
+                               else np.array(point_extents)))
         blank = image_left.min() == image_left.max() or image_right.min() == image_right.max()
         if blank:
             status = "lost"
