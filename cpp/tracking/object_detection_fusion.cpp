@@ -72,13 +72,14 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
   objects::TrackFrame& row = track.last();
   const objects::Detection& det = detections_[d];
   detection_used_[d] = 1;
-  Mat4 T_w_box = geometry::se3_inverse(frame.T_c_w) * det.box.pose();
+  const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
+  Mat4 T_w_box = T_w_c * det.box.pose();
   const Vec3 open_end_w = static_cast<double>(det.open_end) * T_w_box.block<3, 1>(0, 0);  // before any turn
   // a point extent that measured its length: its far end is the one away from the camera
   Vec3 far_end_w = Vec3::Zero();
   if (lidar_options_.point_extent_lengths && det.point_extent && det.open_end == 0) {
     const Vec3 axis_w = T_w_box.block<3, 1>(0, 0);
-    const Vec3 camera_to_box_w = T_w_box.topRightCorner<3, 1>() - geometry::se3_inverse(frame.T_c_w).topRightCorner<3, 1>();
+    const Vec3 camera_to_box_w = T_w_box.topRightCorner<3, 1>() - T_w_c.topRightCorner<3, 1>();
     far_end_w = axis_w.dot(camera_to_box_w) >= 0 ? axis_w : Vec3(-axis_w);
   }
   if (!track.canonical && lidar_options_.canonical_pose) {
