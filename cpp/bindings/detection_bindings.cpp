@@ -60,6 +60,7 @@ py::dict run_detect(const py::handle& points_c, const py::object& options, const
   py::array_t<int> num_points(n);
   py::array_t<bool> length_seen(n);
   py::array_t<std::int8_t> open_end(n);
+  DoubleArray edge_distance = new_array({n});
   py::list classes;
   for (py::ssize_t i = 0; i < n; ++i) {
     const d::Detection& det = r.detections[static_cast<std::size_t>(i)];
@@ -70,13 +71,14 @@ py::dict run_detect(const py::handle& points_c, const py::object& options, const
     num_points.mutable_data()[i] = det.num_points;
     length_seen.mutable_data()[i] = det.length_seen;
     open_end.mutable_data()[i] = static_cast<std::int8_t>(det.open_end);
+    edge_distance.mutable_data()[i] = det.edge_distance_m;
     classes.append(d::to_string(det.cls));
   }
   const py::dict timings("select_ms"_a = r.timings.select_ms, "ground_ms"_a = r.timings.ground_ms,
                          "cluster_ms"_a = r.timings.cluster_ms, "fit_ms"_a = r.timings.fit_ms);
   return py::dict("boxes"_a = boxes, "scores"_a = scores, "classes"_a = classes,
                   "num_points"_a = num_points, "length_seen"_a = length_seen,
-                  "open_end"_a = open_end,
+                  "open_end"_a = open_end, "edge_distance_m"_a = edge_distance,
                   "num_non_finite"_a = r.num_non_finite,
                   "num_selected"_a = r.num_selected, "num_obstacle"_a = r.num_obstacle,
                   "num_clusters"_a = r.num_clusters, "timings"_a = timings);
@@ -107,7 +109,10 @@ dict
     ``length_seen`` (M,) bool, a car whose length was measured (an L-shape) rather than
     set by the ``car_length_m`` prior behind its visible face; ``open_end`` (M,) int8, for
     such a box the end (+1 the +x end along its heading, -1 the -x end) that the prior
-    extended past the seen face, else 0; sorted by decreasing score. Also ``num_non_finite``, ``num_selected``, ``num_obstacle``,
+    extended past the seen face, else 0; ``edge_distance_m`` (M,) float64, the mean distance
+    (m) of the box's footprint returns to the nearest edge of their fitted rectangle (a car's
+    faces: a few cm; cars above ``car_max_edge_distance_m`` are not reported); sorted by
+    decreasing score. Also ``num_non_finite``, ``num_selected``, ``num_obstacle``,
     ``num_clusters`` and ``timings`` (ms per stage: select, ground, cluster, fit).
 
 Raises

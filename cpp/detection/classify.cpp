@@ -34,6 +34,7 @@ Detection make_box(const ClusterShape& s, const BevRectangle& r, int length_axis
   d.yaw = yaw_of(r.axis_direction(length_axis));
   d.cls = cls;
   d.num_points = s.num_points;
+  d.edge_distance_m = r.mean_edge_distance;
   return d;
 }
 
@@ -84,6 +85,7 @@ std::optional<Detection> as_car(const ClusterShape& s, const DetectorOptions& o)
   const int long_axis = f.extent(0) >= f.extent(1) ? 0 : 1;
   const double long_side = f.extent(long_axis), short_side = f.extent(1 - long_axis);
   if (s.top_m < o.car_min_height_m || s.top_m > o.car_max_height_m) return std::nullopt;
+  if (f.mean_edge_distance > o.car_max_edge_distance_m) return std::nullopt;  // no faces: clutter
   if (long_side < o.car_min_visible_m || long_side > o.car_max_length_m ||
       short_side > o.car_max_width_m)
     return std::nullopt;

@@ -29,6 +29,9 @@ struct Detection {
   // its -x end) that the prior extended past the seen face; 0 for a measured length. With a
   // car's true length known (other frames), the centre moves by (true - length) / 2 that way.
   int open_end = 0;
+  // m, mean distance of the footprint's returns to the nearest edge of their fitted
+  // rectangle: a car's faces give a few cm, volumetric clutter (a bush, a hedge) tenths
+  double edge_distance_m = 0;
 };
 
 struct ClusterShape {

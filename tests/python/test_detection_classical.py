@@ -191,3 +191,46 @@ def test_frame_without_scan_is_an_error(sim_sequence):
     frame.points_c = None
     with pytest.raises(ValueError, match="no LiDAR scan"):
         ClassicalDetector()(frame)
+
+
+def test_binding_reports_each_boxs_edge_distance_and_the_cap_holds(sim_sequence):
+    from twistslam._core import detection as _d
+
+    points = sim_sequence[0].points_c
+    out = _d.detect(points)
+    edge = out["edge_distance_m"]
+    assert edge.dtype == np.float64 and edge.shape == (len(out["boxes"]),)
+    assert np.all(edge >= 0)
+    cars = np.asarray(out["classes"]) == "Car"
+    assert cars.any() and np.all(edge[cars] <= default_options()["car_max_edge_distance_m"])
+    # a tighter cap keeps exactly the cars within it
+    cap = float(np.median(edge[cars]))
+    tight = _d.detect(points, {"car_max_edge_distance_m": cap})
+    tight_cars = np.asarray(tight["classes"]) == "Car"
+    assert np.all(tight["edge_distance_m"][tight_cars] <= cap)
+    assert tight_cars.sum() < cars.sum()
+
+
+def test_real_scans_near_car_boxes_lie_on_labelled_cars(kitti_tracking_lidar):
+    # KITTI 0001 passes a row of bushes and hedges on its right at 11-17 m: each was a
+    # car-sized cluster, its returns spread through it (mean edge distance 0.27-0.61 m where
+    # the labelled cars' are 0.08-0.23 m); measured 6 boxes off the labels within 20 m over
+    # the 27 scans without car_max_edge_distance_m, 1 with it
+    seq = KittiTracking(kitti_tracking_lidar, "0001")
+    labels = seq.gt_objects
+    detect = ClassicalDetector()
+    lenient = ClassicalDetector(car_max_edge_distance_m=10.0)
+    off_labels = {"default": 0, "lenient": 0}
+    for i in range(len(seq)):
+        frame = seq.frame(i)
+        rows = (labels.frame == i) & np.isin(labels.cls, ["Car", "Van"])
+        centres = labels.box_3d[rows][:, [0, 2]]
+        for name, det in (("default", detect), ("lenient", lenient)):
+            dets = det(frame)
+            cars = dets.boxes[dets.classes == "Car"]
+            near = cars[np.hypot(cars[:, 0], cars[:, 2]) < 20.0]
+            for box in near:
+                gap = np.min(np.hypot(*(centres - box[[0, 2]]).T)) if len(centres) else np.inf
+                off_labels[name] += int(gap > 2.0)
+    assert off_labels["lenient"] >= 5, off_labels  # the bushes are there to be removed
+    assert off_labels["default"] <= 2, off_labels

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include <stdexcept>
 #include <string>
 
@@ -201,4 +202,56 @@ TEST(Detector, CyclistFromTheSideAndATallCarFromBehind) {
   EXPECT_EQ(cyclist.cls, ObjectClass::kCyclist);
   EXPECT_NEAR(cyclist.centre.x(), bike.x, 0.4);
   EXPECT_LT(yaw_error_mod_pi(cyclist.yaw, bike.yaw), kYawTolerance);
+}
+
+TEST(Detector, BushFilledWithReturnsIsNoCarWhileTheCarBesideItStays) {
+  // a car-sized bush beside a parked car: foliage lets the beams in, so its returns lie
+  // anywhere along each ray's chord through it, not on its faces
+  SceneBox car, bush;
+  car.x = -3.0;
+  car.z = 14.0;
+  car.yaw = 0.5 * M_PI;
+  bush.x = 6.0;
+  bush.z = 14.0;
+  bush.length = 3.5;
+  bush.width = 2.0;
+  bush.height = 1.8;
+  bush.yaw = 0.5 * M_PI;
+  Points3 scan = cast_scene({car, bush});
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> depth(0.0, 1.0);
+  const auto inside_bush = [&](const Vec3& p) {  // yaw pi/2: length along z, width along x
+    return std::abs(p.x() - bush.x) <= 0.5 * bush.width + 1e-6 &&
+           std::abs(p.z() - bush.z) <= 0.5 * bush.length + 1e-6 && p.y() < 1.73 - 1e-6;
+  };
+  int foliage = 0;
+  for (Eigen::Index i = 0; i < scan.rows(); ++i) {
+    const Vec3 p = scan.row(i).transpose();
+    if (!inside_bush(p)) continue;
+    ++foliage;
+    // walk in along the ray by a random share of up to 2.5 m, staying inside the bush
+    double step = 2.5 * depth(rng);
+    while (step > 0.01 && !inside_bush(p * (1.0 + step / p.norm()))) step *= 0.5;
+    scan.row(i) = (p * (1.0 + step / p.norm())).transpose();
+  }
+  ASSERT_GT(foliage, 300);
+
+  const DetectorResult r = detect(scan);
+  ASSERT_EQ(r.detections.size(), 1u);  // the bush is too wide for a person: nothing
+  EXPECT_EQ(r.detections[0].cls, ObjectClass::kCar);
+  EXPECT_NEAR(r.detections[0].centre.x(), car.x, kCentreTolerance);
+  EXPECT_LT(r.detections[0].edge_distance_m, 0.05);  // noiseless faces
+
+  // the rule that removed it: without it the bush is a car whose returns lie tenths of a
+  // metre inside their rectangle
+  DetectorOptions lenient;
+  lenient.car_max_edge_distance_m = 10.0;
+  const DetectorResult all = detect(scan, lenient);
+  ASSERT_EQ(all.detections.size(), 2u);
+  const Detection& b = std::abs(all.detections[0].centre.x() - bush.x) <
+                               std::abs(all.detections[1].centre.x() - bush.x)
+                           ? all.detections[0]
+                           : all.detections[1];
+  EXPECT_EQ(b.cls, ObjectClass::kCar);
+  EXPECT_GT(b.edge_distance_m, DetectorOptions{}.car_max_edge_distance_m);
 }
