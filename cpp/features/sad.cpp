@@ -100,28 +100,39 @@ SadScan scan_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int x_first,
   float contrast = 0;
   for (int k = 0; k < n; ++k) contrast += std::abs(left[k] -= mean_left);
 
-  // column sums of the right band give each window's mean in O(1) per column
+  // The right band as floats once, and each window's mean from the column sums. The cost
+  // then accumulates one left pixel at a time over every disparity: a contiguous loop over
+  // the band that the compiler vectorises (the scan is the stereo search's hot spot), with
+  // each disparity's terms summed in the same order as a window-by-window loop would.
   const int x_begin = x_first - half_width, span = x_last - x_first + cols;
-  std::vector<float> column(span, 0.0f);
+  const int num_columns = x_last - x_first + 1;
+  thread_local std::vector<float> band, column, mean_right, cost;
+  band.resize(static_cast<size_t>(rows) * span);
+  column.assign(span, 0.0f);
   for (int r = 0; r < rows; ++r) {
     const std::uint8_t* p = R.ptr<std::uint8_t>(y - half_height + r) + x_begin;
-    for (int c = 0; c < span; ++c) column[c] += p[c];
+    float* b = band.data() + static_cast<size_t>(r) * span;
+    for (int c = 0; c < span; ++c) column[c] += b[c] = p[c];
   }
-  std::vector<float> cost(x_last - x_first + 1);
-  int best = 0;
-  for (int d = 0; d < static_cast<int>(cost.size()); ++d) {
+  mean_right.resize(num_columns);
+  for (int d = 0; d < num_columns; ++d) {
     float sum_right = 0;
     for (int c = 0; c < cols; ++c) sum_right += column[d + c];
-    const float mean_right = sum_right / n;
-    float sad = 0;
-    for (int r = 0; r < rows; ++r) {
-      const std::uint8_t* b = R.ptr<std::uint8_t>(y - half_height + r) + x_begin + d;
-      const float* l = left.data() + r * cols;
-      for (int c = 0; c < cols; ++c) sad += std::abs(l[c] - (b[c] - mean_right));
-    }
-    cost[d] = sad;
-    if (sad < cost[best]) best = d;
+    mean_right[d] = sum_right / n;
   }
+  cost.assign(num_columns, 0.0f);
+  float* __restrict const cost_d = cost.data();
+  const float* __restrict const mean_d = mean_right.data();
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const float l = left[r * cols + c];
+      const float* b = band.data() + static_cast<size_t>(r) * span + c;
+      for (int d = 0; d < num_columns; ++d) cost_d[d] += std::abs(l - (b[d] - mean_d[d]));
+    }
+  }
+  int best = 0;
+  for (int d = 1; d < num_columns; ++d)
+    if (cost[d] < cost[best]) best = d;
   // the second-best local minimum: the best one's own valley (its slopes) is no competitor
   float second = std::numeric_limits<float>::infinity();
   const int m = static_cast<int>(cost.size());
