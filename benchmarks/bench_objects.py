@@ -388,6 +388,10 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"{'':<14} {'targets':<10} {targets_line(row_figures)}")
                 if args.per_car:
                     print(ev.format_table())
+                    canonical = [f"{c.gt_id}: {c.ate_canonical:.3f} m" for c in ev.cars
+                                 if np.isfinite(c.ate_canonical)]
+                    if canonical:  # issue 11's figure, car by car
+                        print("canonical ATE per car: " + ", ".join(canonical))
     print_summary(figures, args.rows)
     return 0
 
