@@ -175,6 +175,12 @@ def _detector(kind, sequence, detections, weights=None) -> tuple[Callable | None
     if kind is None or kind == "none":
         return None, "none"
     if callable(kind):
+        from .detection_classical import ClassicalDetector
+
+        # the classical detector with the user's options is still the classical detector:
+        # its name picks its masks' score floor (DETECTOR_MASK_MIN_SCORE)
+        if isinstance(kind, ClassicalDetector):
+            return kind, "classical"
         return kind, getattr(kind, "__name__", type(kind).__name__)
     if kind not in DETECTOR_KINDS:
         raise ValueError(f"detector '{kind}': expected one of {', '.join(DETECTOR_KINDS)} or a "
