@@ -4,6 +4,7 @@
 // canonical object frame (the box frame), later boxes give its size (per-dimension median)
 // and the drift-free twist e_det of the object window (optim/visual_object_window.hpp).
 #include <cmath>
+#include <map>
 #include <limits>
 
 #include "geometry/se3.hpp"
@@ -37,12 +38,63 @@ bool has_measured_box(const objects::ObjectTrack& track) {
 
 }  // namespace
 
+bool ObjectTracker::inside_other_box(int d, const Vec3& p_c, double margin) const {
+  for (int e = 0; e < static_cast<int>(detections_.size()); ++e) {
+    if (e == d) continue;
+    const geometry::Box3D& box = detections_[e].box;
+    const Mat4 T_c_b = box.pose();
+    const Vec3 q = T_c_b.topLeftCorner<3, 3>().transpose() * (p_c - T_c_b.topRightCorner<3, 1>());
+    if (std::abs(q.x()) <= box.length / 2 + margin && std::abs(q.y()) <= box.height / 2 + margin &&
+        std::abs(q.z()) <= box.width / 2 + margin)
+      return true;
+  }
+  return false;
+}
+
+int ObjectTracker::instance_of_box(int d) {
+  if (detection_instance_[d] >= 0) return detection_instance_[d];
+  int best = 0;
+  if (scan_ && !instances_.empty()) {
+    const geometry::Box3D& box = detections_[d].box;
+    // the object scan's box (grown by the scan margin: a box is as tight as its returns, which
+    // scatter across its faces), without the road under it, which every mask's lower edge holds
+    const double margin = lidar_options_.scan_margin_m;
+    const Points3 returns = detail::points_in_box(*scan_, box.pose(), Mat4::Identity(),
+                                                  Vec3(box.length, box.width, box.height), margin,
+                                                  lidar_options_.scan_ground_clearance_m);
+    std::map<int, int> votes;  // instance -> returns on its mask
+    int on_objects = 0;
+    for (Eigen::Index i = 0; i < returns.rows(); ++i) {
+      const Vec3 p = returns.row(i).transpose();
+      // a return in another box's grown box too belongs to either car (a queue's bumpers)
+      if (p.z() <= 0.1 || inside_other_box(d, p, margin)) continue;
+      const Vec2 uv = camera_.project(p);
+      if (!camera_.in_image(uv)) continue;
+      const int instance = instances_.at<int>(static_cast<int>(uv.y()), static_cast<int>(uv.x()));
+      const auto cls = instance_class_.find(instance);
+      if (instance <= 0 || cls == instance_class_.end() || !contains(options_.object_class_ids, cls->second))
+        continue;
+      ++votes[instance];
+      ++on_objects;
+    }
+    if (on_objects >= lidar_options_.box_instance_min_returns) {
+      int most = 0;
+      for (const auto& [instance, n] : votes)
+        if (n > most) most = n, best = instance;
+    }
+  }
+  detection_instance_[d] = best;
+  return best;
+}
+
 std::vector<int> ObjectTracker::associate_detections(const Frame& frame,
                                                      const std::vector<int>& clusters,
-                                                     const std::vector<Mat4>& T_w_o) const {
+                                                     const std::vector<Mat4>& T_w_o,
+                                                     const std::vector<int>& instances) {
   std::vector<int> detection_of(clusters.size(), -1);
   if (detections_.empty() || clusters.empty() || !lidar_options_.use_detections) return detection_of;
   const double inf = std::numeric_limits<double>::infinity();
+  const double gate = lidar_options_.detection_max_distance_m;
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(clusters.size(), detections_.size(), inf);
   for (size_t i = 0; i < clusters.size(); ++i) {
     const objects::ObjectTrack& track = tracks_[clusters[i]];
@@ -59,10 +111,22 @@ std::vector<int> ObjectTracker::associate_detections(const Frame& frame,
       if (detection_used_[d] || detections_[d].class_id != track.class_id) continue;
       const geometry::Box3D& box = detections_[d].box;
       // a canonical track's origin is its box centre; a cluster's centroid lies on its faces
-      cost(i, d) = track.canonical ? (centre_c - box.center).norm() : distance_to_box(box, centre_c);
+      const double distance = track.canonical ? (centre_c - box.center).norm() : distance_to_box(box, centre_c);
+      cost(i, d) = distance;
+      // a cluster's first box sets its object frame; the box's LiDAR returns tell on which
+      // instance it lies. One on another instance's mask (the nearer car in front of a partly
+      // hidden one, whose stereo points straddle both) would move the cluster onto that car
+      // and leave its own untracked (crowded seed 4); one on the cluster's own mask is its car
+      // even where a far cluster's stereo depth put it beyond the gate
+      if (track.canonical || instances[i] <= 0 || lidar_options_.box_instance_min_returns <= 0 ||
+          !(distance <= lidar_options_.box_instance_max_distance_m))
+        continue;
+      const int box_instance = instance_of_box(static_cast<int>(d));
+      if (box_instance > 0 && box_instance != instances[i]) cost(i, d) = inf;
+      if (box_instance == instances[i]) cost(i, d) = std::min(distance, gate);
     }
   }
-  for (const auto& [i, d] : objects::solve_assignment(cost, lidar_options_.detection_max_distance_m))
+  for (const auto& [i, d] : objects::solve_assignment(cost, gate))
     detection_of[i] = d;
   return detection_of;
 }
@@ -141,13 +205,14 @@ int ObjectTracker::free_instance_under(const geometry::Box3D& box) const {
 }
 
 void ObjectTracker::attach_new_cluster_detections(const Frame& frame, int first_new) {
-  std::vector<int> fresh;
+  std::vector<int> fresh, instances;
   std::vector<Mat4> poses;
   for (int c = first_new; c < static_cast<int>(tracks_.size()); ++c) {
     fresh.push_back(c);
     poses.push_back(tracks_[c].last().T_w_o);
+    instances.push_back(clusters_[c].instance);
   }
-  const std::vector<int> detection_of = associate_detections(frame, fresh, poses);
+  const std::vector<int> detection_of = associate_detections(frame, fresh, poses, instances);
   for (size_t i = 0; i < fresh.size(); ++i)
     if (detection_of[i] >= 0) {
       attach_detection(fresh[i], frame, detection_of[i]);

@@ -10,6 +10,10 @@ namespace twistslam::tracking {
 struct ObjectLidarOptions {
   bool use_detections = true;              // associate the frame's 3D detections with clusters
   double detection_max_distance_m = 2.0;   // box to cluster (paper: 2 m)
+  // a cluster's first box must fall on its instance: of the box's LiDAR returns landing on
+  // object masks, the most on the cluster's own (decided from this many returns; 0: off)
+  int box_instance_min_returns = 5;
+  double box_instance_max_distance_m = 6.0;  // ... up to this far (a box on its instance: its car)
   double detection_min_score = -1e9;       // detections below this are ignored
   bool canonical_pose = true;              // the first associated box sets the object frame
   double heading_from_motion_m = 1.5;      // travelled this far, a box frame facing backwards turns
@@ -67,6 +71,8 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("use_detections", o.use_detections, 0, 1);
   visit("instance_border_px", o.instance_border_px, 0.0, 50.0);
   visit("detection_max_distance_m", o.detection_max_distance_m, 0.0, 1000.0);
+  visit("box_instance_min_returns", o.box_instance_min_returns, 0, 1000000);
+  visit("box_instance_max_distance_m", o.box_instance_max_distance_m, 0.0, 1000.0);
   visit("detection_min_score", o.detection_min_score, -1e9, 1e9);
   visit("canonical_pose", o.canonical_pose, 0, 1);
   visit("heading_from_motion_m", o.heading_from_motion_m, 0.0, 1e6);

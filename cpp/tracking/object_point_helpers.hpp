@@ -35,6 +35,12 @@ inline Vec3 median_point(std::vector<Vec3> points) {
   return m;
 }
 
+// The scan's points (frame c) inside the box of size (l, w, h) at T_c_o, grown by margin on
+// every side but the bottom, which is raised by ground_clearance; returned in frame x
+// (object_scans.cpp).
+Points3 points_in_box(const Points3& scan_c, const Mat4& T_c_o, const Mat4& T_x_c, const Vec3& size,
+                      double margin, double ground_clearance);
+
 inline bool contains(const std::vector<int>& ids, int id) {
   return std::find(ids.begin(), ids.end(), id) != ids.end();
 }

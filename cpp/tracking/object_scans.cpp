@@ -25,9 +25,11 @@ namespace {
 // Neighbours of each scan point's plane covariance: GicpOptions' default (measured there).
 constexpr int kScanNeighbors = registration::kDefaultNumNeighbors;
 
-// The scan's points (frame c) inside the box of size (l, w, h) at T_c_o, grown by margin on
-// every side but the bottom, which is raised by ground_clearance; returned in the world frame.
-Points3 points_in_box(const Points3& scan_c, const Mat4& T_c_o, const Mat4& T_w_c, const Vec3& size,
+}  // namespace
+
+namespace detail {
+
+Points3 points_in_box(const Points3& scan_c, const Mat4& T_c_o, const Mat4& T_x_c, const Vec3& size,
                       double margin, double ground_clearance) {
   const Mat3 R = T_c_o.topLeftCorner<3, 3>();
   const Vec3 t = T_c_o.topRightCorner<3, 1>();
@@ -42,14 +44,14 @@ Points3 points_in_box(const Points3& scan_c, const Mat4& T_c_o, const Mat4& T_w_
     if (!(d.squaredNorm() <= reach2)) continue;  // far from the box (or not finite)
     const Vec3 q = R.transpose() * d;
     if (std::abs(q.x()) <= half.x() && std::abs(q.z()) <= half.z() && q.y() >= top && q.y() <= bottom)
-      inside.push_back(detail::transform(T_w_c, p));
+      inside.push_back(transform(T_x_c, p));
   }
   Points3 out(static_cast<Eigen::Index>(inside.size()), 3);
   for (size_t i = 0; i < inside.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = inside[i].transpose();
   return out;
 }
 
-}  // namespace
+}  // namespace detail
 
 void ObjectTracker::register_scan(int c, const Frame& frame) {
   objects::ObjectTrack& track = tracks_[c];
@@ -57,7 +59,7 @@ void ObjectTracker::register_scan(int c, const Frame& frame) {
     return;
   objects::TrackFrame& row = track.last();
   const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
-  const Points3 points = points_in_box(*scan_, frame.T_c_w * row.T_w_o, T_w_c, track.size,
+  const Points3 points = detail::points_in_box(*scan_, frame.T_c_w * row.T_w_o, T_w_c, track.size,
                                        lidar_options_.scan_margin_m,
                                        lidar_options_.scan_ground_clearance_m);
   const auto previous = last_scan_.find(track.id);

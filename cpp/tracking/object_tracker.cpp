@@ -360,7 +360,8 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   for (const objects::Detection& d : detections)
     if (d.score >= lidar_options_.detection_min_score && d.box.valid()) detections_.push_back(d);
   detection_used_.assign(detections_.size(), 0);
-  const std::vector<int> detection_of = associate_detections(frame, live, predicted);
+  detection_instance_.assign(detections_.size(), -1);
+  const std::vector<int> detection_of = associate_detections(frame, live, predicted, instance_of);
   for (int j : order) {
     const bool valid = update_cluster(live[j], frame, std::move(matches[j]), instance_of[j],
                                       predicted[j], detection_of[j]);

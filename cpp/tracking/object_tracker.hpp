@@ -122,9 +122,16 @@ class ObjectTracker : public ObjectBundleTerms {
   bool update_cluster(int c, const Frame& frame, std::vector<Match> matches, int instance,
                       const Mat4& T_w_o_pred, int detection);
   // LiDAR fusion (object_detection_fusion.cpp). The detection index per cluster of
-  // `clusters` (at poses T_w_o), one to one, among the boxes not used yet (-1: none).
+  // `clusters` (at poses T_w_o, on instance masks `instances`, -1: none this frame), one to
+  // one, among the boxes not used yet (-1: none).
   std::vector<int> associate_detections(const Frame& frame, const std::vector<int>& clusters,
-                                        const std::vector<Mat4>& T_w_o) const;
+                                        const std::vector<Mat4>& T_w_o,
+                                        const std::vector<int>& instances);
+  // The object instance most of box d's LiDAR returns project onto (0: too few returns on
+  // object masks to tell, or no scan / masks); computed once per box and frame.
+  int instance_of_box(int d);
+  // Whether p (frame c) lies in a box of this frame other than d, grown by margin.
+  bool inside_other_box(int d, const Vec3& p_c, double margin) const;
   // Box d joins cluster c's last frame: canonical frame (first box), size, e_det.
   void attach_detection(int c, const Frame& frame, int d);
   // The object frame of cluster c becomes the box frame T_w_box at its last frame.
@@ -213,6 +220,7 @@ class ObjectTracker : public ObjectBundleTerms {
   Vec4 road_plane_w_ = Vec4::Zero();    // its road plane (zero: none)
   std::vector<objects::Detection> detections_;  // during track(): the frame's boxes (frame c)
   std::vector<char> detection_used_;            // ... associated with a cluster
+  std::vector<int> detection_instance_;         // ... instance_of_box (-1: not computed yet)
   const Points3* scan_ = nullptr;               // during track(): the frame's LiDAR scan (c)
   struct ObjectScan;                            // object_scans.cpp
   std::map<int, std::shared_ptr<const ObjectScan>> last_scan_;  // track id -> its latest scan

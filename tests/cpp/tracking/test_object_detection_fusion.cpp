@@ -337,6 +337,65 @@ TEST_F(DetectionFusion, BoxOfAnotherClassOrFarAwayIsNotAssociated) {
   }
 }
 
+// Crowded seed 4: a car partly hidden behind another. Its cluster's centroid lay within the
+// 2 m gate of the nearer car's box, which then gave it its object frame: a box must fall on
+// the cluster's own instance (its LiDAR returns project onto the masks).
+TEST_F(DetectionFusion, ABoxWhoseReturnsFallOnAnotherInstanceGivesNoObjectFrame) {
+  const Car near_car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.3, 0, 0), 0.0);
+  // the other car 1.4 m behind the first one's far side, its right part in view: keypoints
+  // without stereo depth (none for a cluster of its own, as in that sequence), a car's mask
+  Car other = make_car(rng, Vec3(1.0, 0.5, 17.3), Vec3(0.3, 0, 0), 0.0, 40);
+  // keypoints on the part in view, x in [-0.9, 2] of its 4 m (world x 0.1 to 3 m): the near
+  // car's mask covers its returns left of x = 0 (a quarter), the other's mask the rest
+  for (Vec3& X : other.X_o) X.x() = -0.9 + 0.725 * (X.x() + 2.0);
+  constexpr int kNear = 3, kOther = 8;
+  for (const int min_returns : {5, 0}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.box_instance_min_returns = min_returns;
+    auto tracker = make_tracker({}, lidar);
+    for (int i = 0; i < 4; ++i) {
+      SceneFrame f(i);
+      f.mono = true;
+      f.add_car(other, i, kOther);
+      f.mono = false;
+      f.add_car(near_car, i, kNear);  // the nearer car's mask hides the other one's left part
+      f.add_background(background);
+      const std::vector<objects::Detection> dets{true_box(other, i, rng)};
+      const Points3 scan = car_scan(other, i, rng);
+      tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp, cv::Mat(),
+                    Vec4::Zero(), dets, &scan);
+    }
+    ASSERT_EQ(tracker.tracks().size(), 1u) << "the near car's cluster only";
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    // the box is within the gate of the cluster's centroid: without the rule it is taken
+    EXPECT_EQ(track.canonical, min_returns == 0);
+    for (const auto& row : track.frames) EXPECT_EQ(row.has_detection(), min_returns == 0) << row.frame;
+  }
+}
+
+// A far car's stereo depths can be metres off: its cluster's centroid then lies beyond the
+// 2 m gate of its own box. The box's returns on the cluster's mask say it is the same car.
+TEST_F(DetectionFusion, ABoxOnTheClustersOwnMaskIsItsCarBeyondTheGate) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.3, 0, 0.1), 0.0);
+  Boxes boxes;
+  boxes.lidar = true;
+  boxes.biased_stereo_frames = 1000;
+  boxes.stereo_depth_scale = 1.25;  // the cluster 3.75 m too far: ~2.9 m behind its box
+  for (const int min_returns : {5, 0}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.box_instance_min_returns = min_returns;
+    auto tracker = make_tracker({}, lidar);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    run_with_boxes(tracker, car, background, 3, boxes, rng, &reports);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    EXPECT_EQ(track.canonical, min_returns > 0);
+    EXPECT_EQ(track.frames[0].has_detection(), min_returns > 0);
+    if (min_returns > 0)  // the box frame: at the car, whatever its points' depths
+      EXPECT_LT((track.last().T_w_o.topRightCorner<3, 1>() - car.pose(track.last().frame).topRightCorner<3, 1>()).norm(), 0.3);
+  }
+}
+
 TEST_F(DetectionFusion, BoxesKeepATrackWhoseKeypointsVanish) {
   const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0.0), 0.0);
   auto options = tracking::ObjectTrackingOptions();
