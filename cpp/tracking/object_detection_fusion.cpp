@@ -3,9 +3,11 @@
 // detection_max_distance_m, Hungarian); the first box associated with a cluster sets its
 // canonical object frame (the box frame), later boxes give its size (per-dimension median)
 // and the drift-free twist e_det of the object window (optim/visual_object_window.hpp).
+// Not in the paper: a box's LiDAR returns projected into the instance image say on which
+// object's mask it lies, and a cluster's first box must lie on the cluster's own.
 #include <cmath>
-#include <map>
 #include <limits>
+#include <map>
 
 #include "geometry/se3.hpp"
 #include "objects/assignment.hpp"
@@ -36,20 +38,15 @@ bool has_measured_box(const objects::ObjectTrack& track) {
   return false;
 }
 
-}  // namespace
-
-bool ObjectTracker::inside_other_box(int d, const Vec3& p_c, double margin) const {
-  for (int e = 0; e < static_cast<int>(detections_.size()); ++e) {
-    if (e == d) continue;
-    const geometry::Box3D& box = detections_[e].box;
-    const Mat4 T_c_b = box.pose();
-    const Vec3 q = T_c_b.topLeftCorner<3, 3>().transpose() * (p_c - T_c_b.topRightCorner<3, 1>());
-    if (std::abs(q.x()) <= box.length / 2 + margin && std::abs(q.y()) <= box.height / 2 + margin &&
-        std::abs(q.z()) <= box.width / 2 + margin)
-      return true;
-  }
+// Whether p (frame c) lies within margin of a box of the frame other than box d.
+bool near_other_box(const std::vector<objects::Detection>& detections, size_t d, const Vec3& p_c,
+                    double margin) {
+  for (size_t e = 0; e < detections.size(); ++e)
+    if (e != d && distance_to_box(detections[e].box, p_c) <= margin) return true;
   return false;
 }
+
+}  // namespace
 
 int ObjectTracker::instance_of_box(int d) {
   if (detection_instance_[d] >= 0) return detection_instance_[d];
@@ -67,7 +64,7 @@ int ObjectTracker::instance_of_box(int d) {
     for (Eigen::Index i = 0; i < returns.rows(); ++i) {
       const Vec3 p = returns.row(i).transpose();
       // a return in another box's grown box too belongs to either car (a queue's bumpers)
-      if (p.z() <= 0.1 || inside_other_box(d, p, margin)) continue;
+      if (p.z() <= 0.1 || near_other_box(detections_, static_cast<size_t>(d), p, margin)) continue;
       const Vec2 uv = camera_.project(p);
       if (!camera_.in_image(uv)) continue;
       const int instance = instances_.at<int>(static_cast<int>(uv.y()), static_cast<int>(uv.x()));

@@ -130,8 +130,6 @@ class ObjectTracker : public ObjectBundleTerms {
   // The object instance most of box d's LiDAR returns project onto (0: too few returns on
   // object masks to tell, or no scan / masks); computed once per box and frame.
   int instance_of_box(int d);
-  // Whether p (frame c) lies in a box of this frame other than d, grown by margin.
-  bool inside_other_box(int d, const Vec3& p_c, double margin) const;
   // Box d joins cluster c's last frame: canonical frame (first box), size, e_det.
   void attach_detection(int c, const Frame& frame, int d);
   // The object frame of cluster c becomes the box frame T_w_box at its last frame.
