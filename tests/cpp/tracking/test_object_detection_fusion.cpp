@@ -85,6 +85,9 @@ struct Boxes {
   // point_extent says so to the tracker (Detection::point_extent)
   double far_end_shortfall_m = 0;
   bool point_extent = false;
+  // a second car's box this far from the car's (none: zero), with no returns in the scan (a
+  // parked car hidden behind this one, its few returns too few to vote on a mask)
+  Vec3 decoy_offset = Vec3::Zero();
 };
 
 void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Background& background,
@@ -117,6 +120,7 @@ void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Back
         dets.back().box.yaw += M_PI / 2;
         dets.back().open_end = 1;
       }
+      if (!boxes.decoy_offset.isZero()) dets.push_back(true_box(car, i, rng, 0, boxes.decoy_offset));
     }
     const Points3 scan = boxes.lidar ? car_scan(car, i, rng) : Points3();
     reports->push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
@@ -393,6 +397,34 @@ TEST_F(DetectionFusion, ABoxOnTheClustersOwnMaskIsItsCarBeyondTheGate) {
     EXPECT_EQ(track.frames[0].has_detection(), min_returns > 0);
     if (min_returns > 0)  // the box frame: at the car, whatever its points' depths
       EXPECT_LT((track.last().T_w_o.topRightCorner<3, 1>() - car.pose(track.last().frame).topRightCorner<3, 1>()).norm(), 0.3);
+  }
+}
+
+// Urban seed 0: a far oncoming car's cluster (stereo depths too far) lay 1.76 m from its own
+// box and 1.70 m from the box of a parked car hidden behind it, whose 9 returns were too few
+// to vote. Its own box, on its own mask, must win over a nearer box that did not vote.
+TEST_F(DetectionFusion, ABoxOnTheClustersOwnMaskWinsOverANearerUnvotedBox) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.3, 0, 0.1), 0.0);
+  Boxes boxes;
+  boxes.lidar = true;
+  boxes.biased_stereo_frames = 1000;
+  boxes.stereo_depth_scale = 1.25;      // the cluster's centroid ~3 m behind its car's box ...
+  boxes.decoy_offset = Vec3(0, 0, 4.0);  // ... and about 1 m from the box of a car behind it
+  for (const int min_returns : {5, 0}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.box_instance_min_returns = min_returns;
+    auto tracker = make_tracker({}, lidar);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    run_with_boxes(tracker, car, background, 3, boxes, rng, &reports);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    ASSERT_TRUE(track.canonical) << "a box within the gate either way";
+    const double error_m = (track.last().T_w_o.topRightCorner<3, 1>() -
+                            car.pose(track.last().frame).topRightCorner<3, 1>()).norm();
+    if (min_returns > 0)
+      EXPECT_LT(error_m, 0.3) << "its own box";
+    else  // without the rule, the nearer box: the car behind it
+      EXPECT_GT(error_m, 3.0);
   }
 }
 
