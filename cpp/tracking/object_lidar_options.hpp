@@ -14,6 +14,9 @@ struct ObjectLidarOptions {
   // object masks, the most on the cluster's own (decided from this many returns; 0: off)
   int box_instance_min_returns = 5;
   double box_instance_max_distance_m = 6.0;  // ... up to this far (a box on its instance: its car)
+  // a cluster's instance taken by mask overlap alone must lie within this depth ratio of the
+  // mask's LiDAR returns (a car passing in front of a far cluster; 0: off)
+  double mask_max_depth_ratio = 1.3;
   double detection_min_score = -1e9;       // detections below this are ignored
   bool canonical_pose = true;              // the first associated box sets the object frame
   double heading_from_motion_m = 1.5;      // travelled this far, a box frame facing backwards turns
@@ -73,6 +76,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("detection_max_distance_m", o.detection_max_distance_m, 0.0, 1000.0);
   visit("box_instance_min_returns", o.box_instance_min_returns, 0, 1000000);
   visit("box_instance_max_distance_m", o.box_instance_max_distance_m, 0.0, 1000.0);
+  visit("mask_max_depth_ratio", o.mask_max_depth_ratio, 0.0, 1000.0);  // 0: off, else >= 1
   visit("detection_min_score", o.detection_min_score, -1e9, 1e9);
   visit("canonical_pose", o.canonical_pose, 0, 1);
   visit("heading_from_motion_m", o.heading_from_motion_m, 0.0, 1e6);

@@ -346,7 +346,8 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   }
   // 2. instances <-> clusters
   objects::InstanceAssociationOptions assoc{options_.min_shared_points, options_.min_mask_overlap};
-  const std::vector<int> instance_of = objects::associate_instances(evidence, assoc);
+  std::vector<int> instance_of = objects::associate_instances(evidence, assoc);
+  release_occluding_instances(live, predicted, frame, evidence, &instance_of);
   for (int inst : instance_of)
     if (inst > 0) assigned_instances_.insert(inst);
   // 3. twists, largest clusters first (they claim contested keypoints)

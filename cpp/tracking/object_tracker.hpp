@@ -127,6 +127,14 @@ class ObjectTracker : public ObjectBundleTerms {
   std::vector<int> associate_detections(const Frame& frame, const std::vector<int>& clusters,
                                         const std::vector<Mat4>& T_w_o,
                                         const std::vector<int>& instances);
+  // A cluster given an instance by mask overlap alone (fewer than min_shared_points of its
+  // matches on it) whose points projected on the mask lie mask_max_depth_ratio nearer or
+  // farther than the mask's LiDAR returns: the mask is another car's (one passing in front);
+  // the instance is taken from it (-1), free for a cluster of its own (object_occluders.cpp).
+  void release_occluding_instances(const std::vector<int>& clusters, const std::vector<Mat4>& T_w_o,
+                                   const Frame& frame,
+                                   const std::vector<objects::ClusterInstanceEvidence>& evidence,
+                                   std::vector<int>* instances) const;
   // The object instance most of box d's LiDAR returns project onto (0: too few returns on
   // object masks to tell, or no scan / masks); computed once per box and frame.
   int instance_of_box(int d);

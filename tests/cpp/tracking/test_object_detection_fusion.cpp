@@ -428,6 +428,47 @@ TEST_F(DetectionFusion, ABoxOnTheClustersOwnMaskWinsOverANearerUnvotedBox) {
   }
 }
 
+// Urban seed 0, classical detector: a far parked car's small cluster, hidden by an oncoming
+// car passing in front of it, projected onto that car's mask and took it by overlap; the near
+// car then had no cluster of its own. The mask's LiDAR returns (15 m against the cluster's
+// 30 m) tell the two surfaces apart.
+TEST_F(DetectionFusion, ACarPassingInFrontOfAFarClusterGetsItsOwnCluster) {
+  const Car far_car = make_car(rng, Vec3(2, 0.5, 30), Vec3(0.1, 0, 0), 0.0);  // a slow car
+  // at frame 3 on the far car's ray, half as far: its mask covers the far car's points
+  const Car near_car = make_car(rng, Vec3(1.15, 0.25, 15), Vec3::Zero(), 0.0);
+  for (const double ratio : {1.3, 0.0}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.mask_max_depth_ratio = ratio;
+    auto tracker = make_tracker({}, lidar);
+    int new_at_hiding = 0;
+    for (int i = 0; i < 4; ++i) {
+      SceneFrame f(i);
+      if (i < 3) f.add_car(far_car, i, instance_id(i));
+      else f.add_car(near_car, i, 100 + instance_id(i));  // hides the far car
+      f.add_background(background);
+      // the scan: the visible car's returns (no boxes: the detector missed the near car)
+      const Points3 scan = car_scan(i < 3 ? far_car : near_car, i, rng);
+      const auto report = tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
+                                        cv::Mat(), Vec4::Zero(), {}, &scan);
+      if (i == 3) new_at_hiding = report.num_new;
+    }
+    // the far car's cluster never gains points on the near car (~15 m)
+    const Mat4 T_c_o = tracker.tracks()[0].last().T_w_o;  // camera at the world origin
+    int near_points = 0;
+    for (const objects::ObjectPoint& p : tracker.clusters()[0].points)
+      near_points += (T_c_o.topLeftCorner<3, 3>() * p.X_o + T_c_o.topRightCorner<3, 1>()).z() < 20;
+    if (ratio > 0) {
+      EXPECT_EQ(new_at_hiding, 1) << "the near car starts its own cluster";
+      EXPECT_EQ(tracker.tracks().size(), 2u);
+      EXPECT_EQ(near_points, 0);
+    } else {  // without the test: the far cluster takes the near car's mask and points
+      EXPECT_EQ(new_at_hiding, 0);
+      EXPECT_EQ(tracker.tracks().size(), 1u);
+      EXPECT_GT(near_points, 10);
+    }
+  }
+}
+
 TEST_F(DetectionFusion, BoxesKeepATrackWhoseKeypointsVanish) {
   const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0.0), 0.0);
   auto options = tracking::ObjectTrackingOptions();
