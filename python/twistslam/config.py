@@ -33,6 +33,7 @@ from .config_lidar import PYTHON_ONLY as _LIDAR_PYTHON_ONLY
 from .config_lidar import LidarConfig
 from .config_objects import ObjectsConfig
 from .config_lidar_objects import LidarObjectsConfig
+from .config_detection import DetectionConfig
 from .config_visual_objects import VisualObjectsConfig
 
 
@@ -203,9 +204,10 @@ SECTIONS: dict[str, type] = {
     "lidar": LidarConfig,
     "visual_objects": VisualObjectsConfig,
     "lidar_objects": LidarObjectsConfig,
+    "detection": DetectionConfig,
 }
 #: sections the SLAM system does not read (the object tracker reads ``objects`` itself)
-_NOT_FOR_CORE = ("run", "objects")
+_NOT_FOR_CORE = ("run", "objects", "detection")
 
 
 @dataclass
@@ -229,6 +231,7 @@ class Config:
     lidar: LidarConfig = field(default_factory=LidarConfig)
     visual_objects: VisualObjectsConfig = field(default_factory=VisualObjectsConfig)
     lidar_objects: LidarObjectsConfig = field(default_factory=LidarObjectsConfig)
+    detection: DetectionConfig = field(default_factory=DetectionConfig)
 
     def __post_init__(self) -> None:
         self.validate()

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from .config import Config
+from .config_detection import detector_options
 from .datasets import Frame, Sequence, open_sequence
 from .inputs import PanopticLabels, check_stereo, load_frame
 from .input_checks import check_first_frames
@@ -197,7 +198,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
                                    flow_weights=flow_weights,
                                    segmentation_weights=segmentation_weights,
                                    detector=detector, detector_weights=detector_weights,
-                                   fuse_detections=config.lidar_objects.use_detections)
+                                   fuse_detections=config.lidar_objects.use_detections,
+                                   detector_options=detector_options(config.detection))
     if (perception.segmentation is not None and config.visual_objects.enabled
             and not config.tracking.dynamic_class_ids):
         # eq. 3: object classes track their clusters, never the camera

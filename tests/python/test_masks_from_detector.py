@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import twistslam
+from twistslam.config_detection import detector_options
 from twistslam.datasets import KittiTracking
 from twistslam.eval.object_tracks import evaluate_object_tracks, load_ground_truth
 from twistslam.perception.detection_classical import ClassicalDetector
@@ -122,3 +123,23 @@ def test_auto_without_panoptic_or_detection_files_takes_the_classical_boxes(tmp_
     without_scans = SimpleNamespace(base=tmp_path / "elsewhere", seq="0000")
     stages = perception_stages(without_scans, "auto", None, detector="auto")
     assert stages.segmentation is None and stages.detector is None
+
+
+def test_the_config_detection_section_reaches_the_classical_detector(sim, tmp_path):
+    # twistslam.run passes Config.detection (``--set detection.KEY=VALUE``) to the detector
+    sequence = KittiTracking(sim, "0000")
+    config = twistslam.Config().override("detection.max_range_m=12")
+    options = detector_options(config.detection)
+    near = perception_stages(sequence, "boxes", None, detector="classical", detector_options=options)
+    default = perception_stages(sequence, "boxes", None, detector="classical")
+    assert near.detector.options["max_range_m"] == 12.0
+    frame = sequence.frame(0, lidar=True)
+    ranges_near = np.linalg.norm(near.detect(frame).boxes[:, [0, 2]], axis=1)
+    ranges_all = np.linalg.norm(default.detect(frame).boxes[:, [0, 2]], axis=1)
+    assert (ranges_all > 14).any()  # the default finds cars beyond 12 m ...
+    assert len(ranges_near) and (ranges_near < 14).all()  # ... the option none (box half-length)
+    # and the sequence-level auto choice takes them too
+    (tmp_path / "training" / "velodyne" / "0000").mkdir(parents=True)
+    scans_only = SimpleNamespace(base=tmp_path / "training", seq="0000")
+    auto = perception_stages(scans_only, "auto", None, detector="auto", detector_options=options)
+    assert auto.detector.options["max_range_m"] == 12.0

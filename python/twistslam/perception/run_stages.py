@@ -171,7 +171,9 @@ class TableDetections:
         return Detections3D.from_table(self.table.in_frame(int(frame.index)))
 
 
-def _detector(kind, sequence, detections, weights=None) -> tuple[Callable | None, str]:
+def _detector(kind, sequence, detections, weights=None,
+              options: dict | None = None) -> tuple[Callable | None, str]:
+    """The detection stage and its name; ``options``: the classical detector's."""
     if kind is None or kind == "none":
         return None, "none"
     if callable(kind):
@@ -189,12 +191,14 @@ def _detector(kind, sequence, detections, weights=None) -> tuple[Callable | None
     from .detection import detection_source
 
     if kind in ("classical", "3dssd"):
-        return detection_source(kind, weights=weights), kind
+        return detection_source(kind, weights=weights, options=options), kind
     if detections is None:
         detections = find_detections(sequence)
     if detections is None:
         if kind == "auto":
-            return (detection_source("classical"), "classical") if _has_lidar(sequence) else (None, "none")
+            if not _has_lidar(sequence):
+                return None, "none"
+            return detection_source("classical", options=options), "classical"
         raise FileNotFoundError(f"detector 'files': {sequence} has no detections/<name>/"
                                 f"{getattr(sequence, 'seq', '')}.txt; pass detections=")
     table = load_detections(detections, str(getattr(sequence, "seq", "")), len(sequence))
@@ -205,12 +209,14 @@ def perception_stages(sequence, segmentation: Any = "auto", flow: Any = "auto", 
                       detections: Any = None, flow_weights: str | Path | None = None,
                       segmentation_weights: dict | None = None,
                       detector: Any = "none", detector_weights: str | Path | None = None,
-                      fuse_detections: bool = True) -> Perception:
+                      fuse_detections: bool = True,
+                      detector_options: dict | None = None) -> Perception:
     """The segmentation, flow and detection stages for ``sequence`` (see the module
     docstring). ``segmentation_weights``: the files of ``segmentation="torch"``, ``{"maskrcnn":
     FILE, "semantic": FILE}`` (see :func:`~.panoptic_source.panoptic_source`).
     ``fuse_detections``: the detections serve the LiDAR fusion; when ``False`` the detector
-    only runs when the masks come from it.
+    only runs when the masks come from it. ``detector_options``: the classical detector's
+    options (``Config.detection``; ``None``: its defaults).
 
     Masks from boxes (``"boxes"``, or ``"auto"`` without panoptic files) come from the
     configured detector's boxes of each frame (the detector runs once per frame, for the
@@ -228,7 +234,8 @@ def perception_stages(sequence, segmentation: Any = "auto", flow: Any = "auto", 
     seg_kind = _segmentation_kind(segmentation, sequence)
     detect, detect_name = None, "none"
     if seg_kind != "none" and (fuse_detections or seg_kind == "boxes"):
-        detect, detect_name = _detector(detector, sequence, detections, detector_weights)
+        detect, detect_name = _detector(detector, sequence, detections, detector_weights,
+                                        detector_options)
     from_detections = False
     if callable(seg_kind):
         seg, seg_name = seg_kind, getattr(seg_kind, "__name__", type(seg_kind).__name__)
