@@ -10,7 +10,7 @@ detection.max_range_m=40``. Files and 3DSSD boxes do not read it.
 
 from __future__ import annotations
 
-from dataclasses import make_dataclass
+from dataclasses import asdict, make_dataclass
 
 from ._settings import param
 from ._core import detection as _detection
@@ -38,6 +38,4 @@ DetectionConfig = _detection_config()
 def detector_options(section) -> dict:
     """The section as the options dictionary :class:`~twistslam.perception.ClassicalDetector`
     takes."""
-    from dataclasses import asdict
-
     return asdict(section)

@@ -160,6 +160,17 @@ struct DetectionFusion : ::testing::Test {
     run_with_boxes(tracker, car, background, frames, boxes, rng, &reports);
     return tracker;
   }
+
+  // The same with box_instance_min_returns set (0: the box-on-mask rule off).
+  tracking::ObjectTracker track_with_min_returns(const Car& car, const Boxes& boxes, int min_returns,
+                                                 int frames) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.box_instance_min_returns = min_returns;
+    auto tracker = make_tracker({}, lidar);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    run_with_boxes(tracker, car, background, frames, boxes, rng, &reports);
+    return tracker;
+  }
 };
 
 TEST_F(DetectionFusion, FirstBoxSetsTheCanonicalFrameAndTheBoxesTheSize) {
@@ -386,11 +397,7 @@ TEST_F(DetectionFusion, ABoxOnTheClustersOwnMaskIsItsCarBeyondTheGate) {
   boxes.biased_stereo_frames = 1000;
   boxes.stereo_depth_scale = 1.25;  // the cluster 3.75 m too far: ~2.9 m behind its box
   for (const int min_returns : {5, 0}) {
-    tracking::ObjectLidarOptions lidar;
-    lidar.box_instance_min_returns = min_returns;
-    auto tracker = make_tracker({}, lidar);
-    std::vector<tracking::ObjectTrackingReport> reports;
-    run_with_boxes(tracker, car, background, 3, boxes, rng, &reports);
+    const auto tracker = track_with_min_returns(car, boxes, min_returns, 3);
     ASSERT_EQ(tracker.tracks().size(), 1u);
     const objects::ObjectTrack& track = tracker.tracks()[0];
     EXPECT_EQ(track.canonical, min_returns > 0);
@@ -411,11 +418,7 @@ TEST_F(DetectionFusion, ABoxOnTheClustersOwnMaskWinsOverANearerUnvotedBox) {
   boxes.stereo_depth_scale = 1.25;      // the cluster's centroid ~3 m behind its car's box ...
   boxes.decoy_offset = Vec3(0, 0, 4.0);  // ... and about 1 m from the box of a car behind it
   for (const int min_returns : {5, 0}) {
-    tracking::ObjectLidarOptions lidar;
-    lidar.box_instance_min_returns = min_returns;
-    auto tracker = make_tracker({}, lidar);
-    std::vector<tracking::ObjectTrackingReport> reports;
-    run_with_boxes(tracker, car, background, 3, boxes, rng, &reports);
+    const auto tracker = track_with_min_returns(car, boxes, min_returns, 3);
     ASSERT_EQ(tracker.tracks().size(), 1u);
     const objects::ObjectTrack& track = tracker.tracks()[0];
     ASSERT_TRUE(track.canonical) << "a box within the gate either way";
