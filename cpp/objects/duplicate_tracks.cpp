@@ -5,10 +5,19 @@
 #include "geometry/se3.hpp"
 
 namespace twistslam::objects {
+namespace {
 
-std::vector<char> duplicate_tracks(const std::vector<TrackFootprint>& tracks, double margin_m) {
-  std::vector<char> duplicate(tracks.size(), 0);
-  if (!(margin_m >= 0)) return duplicate;
+// whether track a ranks above track b (index order breaks ties)
+bool ranks_above(const TrackFootprint& a, size_t index_a, const TrackFootprint& b, size_t index_b) {
+  if (a.boxes != b.boxes) return a.boxes > b.boxes;
+  return index_a < index_b;
+}
+
+}  // namespace
+
+std::vector<int> duplicate_owners(const std::vector<TrackFootprint>& tracks, double margin_m) {
+  std::vector<int> owner(tracks.size(), -1);
+  if (!(margin_m >= 0)) return owner;
   for (size_t a = 0; a < tracks.size(); ++a) {
     const TrackFootprint& box = tracks[a];
     if (!box.canonical || !(box.size.minCoeff() > 0)) continue;
@@ -17,14 +26,14 @@ std::vector<char> duplicate_tracks(const std::vector<TrackFootprint>& tracks, do
     const double half_length = box.size.x() / 2 + margin_m, half_width = box.size.y() / 2 + margin_m;
     for (size_t b = 0; b < tracks.size(); ++b) {
       const TrackFootprint& other = tracks[b];
-      if (b == a || other.class_id != box.class_id) continue;
-      if (other.boxes > box.boxes || (other.boxes == box.boxes && b < a)) continue;
+      if (b == a || other.class_id != box.class_id || !ranks_above(box, a, other, b)) continue;
       const Vec3 p = T_o_w.topLeftCorner<3, 3>() * other.T_w_o.topRightCorner<3, 1>() +
                      T_o_w.topRightCorner<3, 1>();
-      if (std::abs(p.x()) <= half_length && std::abs(p.z()) <= half_width) duplicate[b] = 1;
+      if (std::abs(p.x()) > half_length || std::abs(p.z()) > half_width) continue;
+      if (owner[b] < 0 || ranks_above(box, a, tracks[owner[b]], owner[b])) owner[b] = static_cast<int>(a);
     }
   }
-  return duplicate;
+  return owner;
 }
 
 }  // namespace twistslam::objects

@@ -18,9 +18,10 @@ struct TrackFootprint {
   int boxes = 0;                  // detections associated over the track's life
 };
 
-// Per track: whether its origin lies inside the footprint (length x width, the height is not
-// compared: both stand on the road) of another canonical track of its class, grown by
-// margin_m, that has more boxes (equal: the earlier in the list). margin_m < 0: none.
-std::vector<char> duplicate_tracks(const std::vector<TrackFootprint>& tracks, double margin_m);
+// Per track: the index of the track whose footprint holds its origin (-1: none). A footprint
+// is a canonical track's length x width (the height is not compared: both stand on the road),
+// grown by margin_m, of the same class, and it holds only tracks it ranks above: more boxes,
+// then earlier in the list. Of several such owners, the highest ranked. margin_m < 0: none.
+std::vector<int> duplicate_owners(const std::vector<TrackFootprint>& tracks, double margin_m);
 
 }  // namespace twistslam::objects

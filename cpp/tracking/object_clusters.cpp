@@ -16,6 +16,7 @@ namespace twistslam::tracking {
 
 using detail::contains;
 using detail::median_point;
+using detail::median_value;
 using detail::observe;
 using detail::transform;
 
@@ -60,6 +61,21 @@ bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points
                                 bool ground_contact, std::vector<std::pair<int, Vec3>>* kept,
                                 Vec3* centroid) const {
   auto fresh = free_instance_points(frame, instance);
+  const double ratio = lidar_options_.mask_max_depth_ratio;
+  const std::vector<double>* returns = ratio > 0 ? mask_lidar_depths(instance) : nullptr;
+  if (returns && static_cast<int>(returns->size()) >= lidar_options_.mask_min_returns) {
+    // a stereo point that far in front of the surface the LiDAR sees on the mask cannot be on
+    // it: a wrong match. Crowded s4, classical detector: 7 stereo depths at 1.5-1.6 m (SAD
+    // matches at the search's near end) on a mask whose car was 8 m away seeded a ghost 1-2 m
+    // before the camera. Points beyond the surface are kept (a mask's returns can be its
+    // nearer parts). Placing the near ones at the LiDAR depth instead cost urban s0 a car
+    // (classical detector, 6/6 -> 5/6) and crowded s1 RPE_r (0.173 -> 0.204 deg/m)
+    const double mask_depth = median_value(*returns);
+    const map::StereoKeypoints& k = frame.keypoints;
+    fresh.erase(std::remove_if(fresh.begin(), fresh.end(),
+                               [&](const std::pair<int, Vec3>& f) { return mask_depth > ratio * k.depth[f.first]; }),
+                fresh.end());
+  }
   if (static_cast<int>(fresh.size()) < min_points && ground_contact && options_.ground_contact &&
       !labels_.empty() && road_plane_w_.head<3>().norm() > 0) {
     const auto mono = ground_contact_points(frame, instance);

@@ -15,8 +15,10 @@ struct ObjectLidarOptions {
   int box_instance_min_returns = 5;
   double box_instance_max_distance_m = 6.0;  // ... up to this far (a box on its instance: its car)
   // a cluster's instance taken by mask overlap alone must lie within this depth ratio of the
-  // mask's LiDAR returns (a car passing in front of a far cluster; 0: off)
+  // mask's LiDAR returns (a car passing in front of a far cluster; 0: off), and a new cluster's
+  // stereo points as well (wrong matches)
   double mask_max_depth_ratio = 1.3;
+  int mask_min_returns = 1;                // fewer LiDAR returns on a mask: no depth test
   double detection_min_score = -1e9;       // detections below this are ignored
   bool canonical_pose = true;              // the first associated box sets the object frame
   double heading_from_motion_m = 1.5;      // travelled this far, a box frame facing backwards turns
@@ -77,6 +79,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("box_instance_min_returns", o.box_instance_min_returns, 0, 1000000);
   visit("box_instance_max_distance_m", o.box_instance_max_distance_m, 0.0, 1000.0);
   visit("mask_max_depth_ratio", o.mask_max_depth_ratio, 0.0, 1000.0);  // 0: off, else >= 1
+  visit("mask_min_returns", o.mask_min_returns, 1, 1000000);
   visit("detection_min_score", o.detection_min_score, -1e9, 1e9);
   visit("canonical_pose", o.canonical_pose, 0, 1);
   visit("heading_from_motion_m", o.heading_from_motion_m, 0.0, 1e6);

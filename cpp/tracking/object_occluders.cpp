@@ -5,7 +5,6 @@
 // car's 6-point cluster at 51 m took an oncoming car's mask at 38 m by overlap, grew its points
 // there and held it for 20 frames while no cluster started on that car).
 #include <algorithm>
-#include <map>
 #include <vector>
 
 #include "tracking/instance_pixels.hpp"
@@ -13,17 +12,26 @@
 #include "tracking/object_tracker.hpp"
 
 namespace twistslam::tracking {
+using detail::median_value;
 using detail::transform;
 
-namespace {
-
-double median(std::vector<double> values) {
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  return *mid;
+const std::vector<double>* ObjectTracker::mask_lidar_depths(int instance) const {
+  if (!scan_ || instances_.empty()) return nullptr;
+  if (!mask_lidar_depths_ready_) {
+    for (Eigen::Index i = 0; i < scan_->rows(); ++i) {  // one pass over the scan
+      const Vec3 p = scan_->row(i).transpose();
+      if (!(p.z() > 0.1)) continue;
+      const Vec2 uv = camera_.project(p);
+      if (!camera_.in_image(uv)) continue;
+      const int id = pixel_value(instances_, uv);
+      if (id > 0) mask_lidar_depths_[id].push_back(p.z());
+    }
+    mask_lidar_depths_ready_ = true;
+  }
+  static const std::vector<double> kNone;
+  const auto it = mask_lidar_depths_.find(instance);
+  return it == mask_lidar_depths_.end() ? &kNone : &it->second;
 }
-
-}  // namespace
 
 void ObjectTracker::release_occluding_instances(const std::vector<int>& clusters, const std::vector<Mat4>& T_w_o,
                                                 const Frame& frame,
@@ -35,34 +43,21 @@ void ObjectTracker::release_occluding_instances(const std::vector<int>& clusters
   // and with them the test cost the camera alone (ten sequences: RPE_r 0.184 -> 0.190 deg/m)
   if (!(ratio > 0) || instances_.empty() || !scan_) return;
   // the clusters given their instance by overlap alone, and their points' depths on it
-  std::map<int, std::vector<double>> cluster_depths;  // by index into clusters
-  std::map<int, std::vector<double>> mask_depths;     // by instance
   for (size_t j = 0; j < clusters.size(); ++j) {
     const int instance = (*instances)[j];
     if (instance <= 0 || evidence[j].shared.count(instance) >= options_.min_shared_points) continue;
     const Mat4 T_c_o = frame.T_c_w * T_w_o[j];
-    std::vector<double>& depths = cluster_depths[static_cast<int>(j)];
+    std::vector<double> depths;
     for (const objects::ObjectPoint& p : clusters_[clusters[j]].points) {
       const Vec3 X_c = transform(T_c_o, p.X_o);
       if (X_c.z() <= 0.1) continue;
       const Vec2 uv = camera_.project(X_c);
       if (camera_.in_image(uv) && pixel_value(instances_, uv) == instance) depths.push_back(X_c.z());
     }
-    mask_depths[instance];
-  }
-  if (mask_depths.empty()) return;
-  for (Eigen::Index i = 0; i < scan_->rows(); ++i) {  // one pass over the scan
-    const Vec3 p = scan_->row(i).transpose();
-    if (!(p.z() > 0.1)) continue;
-    const Vec2 uv = camera_.project(p);
-    if (!camera_.in_image(uv)) continue;
-    const auto it = mask_depths.find(pixel_value(instances_, uv));
-    if (it != mask_depths.end()) it->second.push_back(p.z());
-  }
-  for (const auto& [j, depths] : cluster_depths) {
-    const std::vector<double>& returns = mask_depths[(*instances)[j]];
-    if (depths.empty() || returns.empty()) continue;  // nothing to compare
-    const double cluster_depth = median(depths), mask_depth = median(returns);
+    const std::vector<double>* returns = mask_lidar_depths(instance);
+    if (depths.empty() || static_cast<int>(returns->size()) < lidar_options_.mask_min_returns)
+      continue;  // nothing to compare
+    const double cluster_depth = median_value(depths), mask_depth = median_value(*returns);
     if (cluster_depth > ratio * mask_depth || mask_depth > ratio * cluster_depth) (*instances)[j] = -1;
   }
 }

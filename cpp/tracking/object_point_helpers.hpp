@@ -35,6 +35,13 @@ inline Vec3 median_point(std::vector<Vec3> points) {
   return m;
 }
 
+// The median of values (the upper one of an even count). values must not be empty.
+inline double median_value(std::vector<double> values) {
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
 // The scan's points (frame c) inside the box of size (l, w, h) at T_c_o, grown by margin on
 // every side but the bottom, which is raised by ground_clearance; returned in frame x
 // (object_scans.cpp).

@@ -135,6 +135,10 @@ class ObjectTracker : public ObjectBundleTerms {
                                    const Frame& frame,
                                    const std::vector<objects::ClusterInstanceEvidence>& evidence,
                                    std::vector<int>* instances) const;
+  // The depths (m, camera frame) of the frame's LiDAR returns that project onto `instance`'s
+  // mask (nullptr: no scan or no masks); one pass over the scan for every instance, the first
+  // time a frame asks (object_occluders.cpp).
+  const std::vector<double>* mask_lidar_depths(int instance) const;
   // The object instance most of box d's LiDAR returns project onto (0: too few returns on
   // object masks to tell, or no scan / masks); computed once per box and frame.
   int instance_of_box(int d);
@@ -167,6 +171,8 @@ class ObjectTracker : public ObjectBundleTerms {
   // their centroid (world frame); false with fewer than min_points. With ground_contact
   // (vehicles) and too few stereo points, the instance's keypoints without depth are placed
   // at its ground-contact depth instead (ground_contact.hpp).
+  // With a LiDAR scan, stereo points more than mask_max_depth_ratio nearer than the median of
+  // the mask's returns are left out (in front of the surface the LiDAR sees: wrong matches).
   bool seed_points(const Frame& frame, int instance, int min_points, bool ground_contact,
                    std::vector<std::pair<int, Vec3>>* kept, Vec3* centroid) const;
   // The free keypoints of `instance` without a stereo depth, at its ground-contact depth
@@ -228,6 +234,9 @@ class ObjectTracker : public ObjectBundleTerms {
   std::vector<char> detection_used_;            // ... associated with a cluster
   std::vector<int> detection_instance_;         // ... instance_of_box (-1: not computed yet)
   const Points3* scan_ = nullptr;               // during track(): the frame's LiDAR scan (c)
+  // during track(): mask_lidar_depths' instance -> depths, filled on its first call
+  mutable std::map<int, std::vector<double>> mask_lidar_depths_;
+  mutable bool mask_lidar_depths_ready_ = false;
   struct ObjectScan;                            // object_scans.cpp
   std::map<int, std::shared_ptr<const ObjectScan>> last_scan_;  // track id -> its latest scan
   int next_id_ = 0;

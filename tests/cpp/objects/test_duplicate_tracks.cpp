@@ -33,27 +33,36 @@ TEST(DuplicateTracks, TheTrackWithFewerBoxesInsideTheOthersFootprintIsTheDuplica
   const Vec3 along = geometry::so3_exp(Vec3(0, 0.3, 0)) * Vec3(1.8, 0, 0);
   const TrackFootprint car = car_at(centre, 0.3, 20);
   const TrackFootprint second = car_at(centre + along, 2.9, 2);  // its frame turned by ~150 deg
-  EXPECT_EQ(duplicate_tracks({car, second}, 0.3), (std::vector<char>{0, 1}));
+  EXPECT_EQ(duplicate_owners({car, second}, 0.3), (std::vector<int>{-1, 0}));
   // the same two, the second with more boxes: the first is the duplicate
-  EXPECT_EQ(duplicate_tracks({car_at(centre, 0.3, 2), car_at(centre + along, 2.9, 20)}, 0.3),
-            (std::vector<char>{1, 0}));
+  EXPECT_EQ(duplicate_owners({car_at(centre, 0.3, 2), car_at(centre + along, 2.9, 20)}, 0.3),
+            (std::vector<int>{1, -1}));
   // equal boxes: the earlier one in the list stays
-  EXPECT_EQ(duplicate_tracks({car_at(centre, 0.3, 5), car_at(centre + along, 0.3, 5)}, 0.3),
-            (std::vector<char>{0, 1}));
+  EXPECT_EQ(duplicate_owners({car_at(centre, 0.3, 5), car_at(centre + along, 0.3, 5)}, 0.3),
+            (std::vector<int>{-1, 0}));
   // a cluster track (no box frame) on the car is a duplicate too, but never hides the car
-  EXPECT_EQ(duplicate_tracks({car, car_at(centre + along, 0.0, 0, false)}, 0.3), (std::vector<char>{0, 1}));
+  EXPECT_EQ(duplicate_owners({car, car_at(centre + along, 0.0, 0, false)}, 0.3), (std::vector<int>{-1, 0}));
 }
 
 TEST(DuplicateTracks, CarsSideBySideAnotherClassOrANegativeMarginHideNothing) {
   const Vec3 centre(2, 1.5, 30);
   const Vec3 beside = geometry::so3_exp(Vec3(0, 0.3, 0)) * Vec3(0, 0, 2.0);  // parked next to it
-  EXPECT_EQ(duplicate_tracks({car_at(centre, 0.3, 20), car_at(centre + beside, 0.3, 3)}, 0.3),
-            (std::vector<char>{0, 0}));
-  EXPECT_EQ(duplicate_tracks({car_at(centre, 0.3, 20), car_at(centre, 0.3, 3, true, 24)}, 0.3),
-            (std::vector<char>{0, 0}));
-  EXPECT_EQ(duplicate_tracks({car_at(centre, 0.3, 20), car_at(centre, 0.3, 3)}, -1.0),
-            (std::vector<char>{0, 0}));
+  EXPECT_EQ(duplicate_owners({car_at(centre, 0.3, 20), car_at(centre + beside, 0.3, 3)}, 0.3),
+            (std::vector<int>{-1, -1}));
+  EXPECT_EQ(duplicate_owners({car_at(centre, 0.3, 20), car_at(centre, 0.3, 3, true, 24)}, 0.3),
+            (std::vector<int>{-1, -1}));
+  EXPECT_EQ(duplicate_owners({car_at(centre, 0.3, 20), car_at(centre, 0.3, 3)}, -1.0),
+            (std::vector<int>{-1, -1}));
   // two cluster tracks without box frames: nothing to compare against
-  EXPECT_EQ(duplicate_tracks({car_at(centre, 0, 0, false), car_at(centre, 0, 0, false)}, 0.3),
-            (std::vector<char>{0, 0}));
+  EXPECT_EQ(duplicate_owners({car_at(centre, 0, 0, false), car_at(centre, 0, 0, false)}, 0.3),
+            (std::vector<int>{-1, -1}));
+}
+
+TEST(DuplicateTracks, OfSeveralOwnersTheHighestRankedHoldsTheDuplicate) {
+  const Vec3 centre(2, 1.5, 30);
+  const Vec3 along = geometry::so3_exp(Vec3(0, 0.3, 0)) * Vec3(0.4, 0, 0);
+  // three tracks on one car: 30, 20 and 10 boxes; both others are the first one's duplicates
+  const std::vector<int> owner = duplicate_owners(
+      {car_at(centre + along, 0.3, 20), car_at(centre - along, 0.3, 10), car_at(centre, 0.3, 30)}, 0.3);
+  EXPECT_EQ(owner, (std::vector<int>{2, 2, -1}));
 }
