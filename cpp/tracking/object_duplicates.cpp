@@ -1,7 +1,7 @@
 // One car, one output track (objects/duplicate_tracks.hpp): of two tracks on one car this
-// frame, the one with fewer boxes is not reported in it. Oracle
-// urban seed 1: a second cluster on an oncoming car, its frame from a wrong box (turned by
-// 170 deg), was reported as the car's main track (RPE_r 2.7 deg/m; 0.1 without it).
+// frame, the one with fewer boxes is not reported in it. Oracle urban seed 1: a second
+// cluster on an oncoming car, its frame from a wrong box (turned by 170 deg), was reported
+// as the car's main track (RPE_r 2.7 deg/m; 0.1 without it).
 // The owner need not be reported itself: an owner whose twist failed this frame (a car
 // passing the camera, its points leaving the image) while a duplicate on it was tracked
 // reports its prediction instead, the duplicate's observation placing the car there.

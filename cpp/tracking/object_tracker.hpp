@@ -161,7 +161,8 @@ class ObjectTracker : public ObjectBundleTerms {
   // Clusters from first_new on (started this frame) take the boxes still unused.
   void attach_new_cluster_detections(const Frame& frame, int first_new);
   // Two tracks on one car this frame (one's origin inside the other's canonical box): the one
-  // with fewer boxes is not reported in this frame (object_duplicates.cpp).
+  // with fewer boxes is not reported in this frame, and the other one is, its prediction if
+  // its own twist failed (object_duplicates.cpp).
   void hide_duplicate_tracks(const Frame& frame);
   // Step 4: stereo keypoints of `instance` not claimed yet -> points of cluster c.
   void add_points(int c, const Frame& frame, int instance);
