@@ -33,10 +33,13 @@ class FrameBuilder {
   // refers to its own keypoints, which a moved frame would leave behind. object_mask: empty
   // or CV_8UC1, non-zero on object instances (object_class_mask): extra keypoints are
   // extracted there when visual_objects.extra_keypoints (never usable for the camera).
+  // instances: empty or the CV_32SC1 instance ids the mask came from (a second pass on the
+  // masks left with few keypoints, ObjectKeypointExtractor::extract).
   // Throws std::invalid_argument on bad sizes or types.
   FrameBuildReport build(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
                          const cv::Mat& labels, const Points3& points_c, Frame* frame,
-                         const cv::Mat& object_mask = cv::Mat()) const;
+                         const cv::Mat& object_mask = cv::Mat(),
+                         const cv::Mat& instances = cv::Mat()) const;
 
   const features::OrbExtractor& extractor() const { return extractor_; }
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <unordered_map>
+#include <unordered_set>
 
 namespace twistslam::tracking {
 namespace {
@@ -46,6 +48,35 @@ class SpacingGrid {
   std::vector<std::vector<cv::Point2f>> cells_;
 };
 
+// The object mask's pixels on instances holding fewer than min_keypoints of `keypoints`
+// (255; 0 elsewhere), and how many such instances there are.
+cv::Mat deprived_instances_mask(const std::vector<cv::KeyPoint>& keypoints,
+                                const cv::Mat& object_mask, const cv::Mat& instances,
+                                int min_keypoints, int* num_deprived) {
+  std::unordered_map<int, int> count;
+  for (const cv::KeyPoint& k : keypoints) {
+    const cv::Point p(static_cast<int>(std::lround(k.pt.x)), static_cast<int>(std::lround(k.pt.y)));
+    if (p.x < 0 || p.y < 0 || p.x >= instances.cols || p.y >= instances.rows) continue;
+    if (object_mask.at<std::uint8_t>(p.y, p.x)) ++count[instances.at<int>(p.y, p.x)];
+  }
+  cv::Mat mask(object_mask.size(), CV_8UC1, cv::Scalar(0));
+  std::unordered_set<int> deprived;
+  for (int v = 0; v < mask.rows; ++v) {
+    const std::uint8_t* on = object_mask.ptr<std::uint8_t>(v);
+    const int* inst = instances.ptr<int>(v);
+    std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+    for (int u = 0; u < mask.cols; ++u) {
+      if (!on[u]) continue;
+      const auto it = count.find(inst[u]);
+      if (it != count.end() && it->second >= min_keypoints) continue;
+      m[u] = 255;
+      deprived.insert(inst[u]);
+    }
+  }
+  *num_deprived = static_cast<int>(deprived.size());
+  return mask;
+}
+
 }  // namespace
 
 cv::Mat object_class_mask(const cv::Mat& instances, const cv::Mat& labels,
@@ -74,7 +105,9 @@ cv::Mat object_class_mask(const cv::Mat& instances, const cv::Mat& labels,
 
 ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& main,
                                                  const ObjectTrackingOptions& options)
-    : extractor_(mask_orb_options(main, options)), min_spacing_px_(options.extra_min_spacing_px),
+    : extractor_(mask_orb_options(main, options)), instance_pass_(mask_orb_options(main, options)),
+      min_instance_keypoints_(options.extra_min_instance_keypoints),
+      min_spacing_px_(options.extra_min_spacing_px),
       left_right_check_(options.left_right_check),
       left_right_tolerance_px_(static_cast<float>(options.left_right_tolerance_px)) {
   search_.min_depth = static_cast<float>(options.extra_min_depth_m);
@@ -87,7 +120,8 @@ ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& mai
 ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
                                                       const cv::Mat& object_mask,
                                                       const geometry::StereoCamera& camera,
-                                                      features::StereoFeatures* f) const {
+                                                      features::StereoFeatures* f,
+                                                      const cv::Mat& instances) const {
   ObjectKeypointReport report;
   if (object_mask.empty() || cv::countNonZero(object_mask) == 0) return report;
   features::Keypoints& left = f->left;
@@ -95,16 +129,32 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
   if (static_cast<int>(f->matches.depth.size()) != n_old)
     throw std::invalid_argument("ObjectKeypointExtractor: matches do not belong to the keypoints");
 
-  features::Keypoints extra = extractor_.extract(gray_left, object_mask);
+  if (!instances.empty() && (instances.type() != CV_32SC1 || instances.size() != object_mask.size()))
+    throw std::invalid_argument("ObjectKeypointExtractor: instances must be int32 ids of the mask's size");
   SpacingGrid grid(gray_left.cols, gray_left.rows, min_spacing_px_);
   for (const cv::KeyPoint& k : left.keypoints) grid.add(k.pt);
   std::vector<cv::Mat> rows;
-  for (int j = 0; j < static_cast<int>(extra.size()); ++j) {
-    const cv::KeyPoint& k = extra.keypoints[j];
-    if (grid.near(k.pt)) continue;
-    grid.add(k.pt);
-    left.keypoints.push_back(k);
-    rows.push_back(extra.descriptors.row(j));
+  auto append = [&](const features::Keypoints& extra) {
+    for (int j = 0; j < static_cast<int>(extra.size()); ++j) {
+      const cv::KeyPoint& k = extra.keypoints[j];
+      if (grid.near(k.pt)) continue;
+      grid.add(k.pt);
+      left.keypoints.push_back(k);
+      rows.push_back(extra.descriptors.row(j));
+    }
+  };
+  const features::Keypoints extra = extractor_.extract(gray_left, object_mask);
+  append(extra);
+  if (!instances.empty() && min_instance_keypoints_ > 0) {
+    // the pass's budget is spread over the masks' area, so near cars take most of it; a small
+    // or far instance left short gets its own share in a second pass over the short ones
+    const cv::Mat deprived = deprived_instances_mask(left.keypoints, object_mask, instances,
+                                                     min_instance_keypoints_, &report.num_deprived);
+    if (report.num_deprived > 0) {
+      features::OrbOptions o = instance_pass_;
+      o.num_features = std::min(report.num_deprived * min_instance_keypoints_, 100000);
+      append(features::OrbExtractor(o).extract(gray_left, deprived));
+    }
   }
   report.num_added = static_cast<int>(rows.size());
   if (!rows.empty()) {

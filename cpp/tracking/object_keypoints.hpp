@@ -19,6 +19,7 @@ namespace twistslam::tracking {
 
 struct ObjectKeypointReport {
   int num_added = 0;      // new keypoints appended to the left keypoints
+  int num_deprived = 0;   // instances that got a second pass on their own mask
   int num_new_depth = 0;  // object keypoints (new or old) that the SAD scan gave a depth
   int num_left_right_removed = 0;  // object keypoints whose depth failed the left-right check
 };
@@ -38,12 +39,17 @@ class ObjectKeypointExtractor {
   // depth of every object keypoint that has none; with the left-right check, every object
   // keypoint's depth is then checked back from the right image. Needs the left and right
   // pyramids of extract_and_match. Keypoints at index >= the old size are the new ones.
+  // instances (empty, or CV_32SC1 ids of the image size): an instance whose mask then holds
+  // fewer than extra_min_instance_keypoints keypoints gets a second pass on its own mask.
   ObjectKeypointReport extract(const cv::Mat& gray_left, const cv::Mat& object_mask,
                                const geometry::StereoCamera& camera,
-                               features::StereoFeatures* features) const;
+                               features::StereoFeatures* features,
+                               const cv::Mat& instances = cv::Mat()) const;
 
  private:
   features::OrbExtractor extractor_;
+  features::OrbOptions instance_pass_;  // the second pass's options, but its budget
+  int min_instance_keypoints_;
   features::StereoSearchOptions search_;
   double min_spacing_px_;
   bool left_right_check_;

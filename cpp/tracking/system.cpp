@@ -75,7 +75,8 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
       object_mask = object_class_mask(instances, labels, vo.object_class_ids);
   }
   FrameBuildReport built =
-      frame_builder_.build(index, timestamp, left, right, labels, points_c, &frame, object_mask);
+      frame_builder_.build(index, timestamp, left, right, labels, points_c, &frame, object_mask,
+                           object_mask.empty() ? cv::Mat() : instances);
   result.timings_ms = std::move(built.timings_ms);
   result.num_lidar_depth = built.num_lidar_depth;
   StageTimer timer(&result);

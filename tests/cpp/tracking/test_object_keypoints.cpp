@@ -198,6 +198,46 @@ TEST(ObjectKeypointExtractor, EmptyMaskAddsNothing) {
   EXPECT_THROW(extra.extract(s.left, s.mask, s.cam, &f), std::invalid_argument);
 }
 
+TEST(ObjectKeypointExtractor, AnInstanceTheSharedBudgetLeavesShortGetsASecondPass) {
+  // the car (instance 1) beside a large instance (2: most of the background, its texture
+  // stronger than the car's paint): the pass's budget goes to the large one
+  const CarScene& s = car_scene();
+  cv::Mat instances(s.left.size(), CV_32SC1, cv::Scalar(0));
+  instances(cv::Rect(0, 0, s.left.cols * 3 / 5, s.left.rows)).setTo(2);
+  instances.setTo(1, s.mask);
+  const cv::Mat object_mask = instances > 0;
+  const features::OrbExtractor main_orb(features::OrbOptions{});
+  const features::StereoFeatures f0 = features::extract_and_match(main_orb, s.left, s.right, s.cam);
+  auto on_car_after = [&](int min_instance_keypoints, tracking::ObjectKeypointReport* report) {
+    tracking::ObjectTrackingOptions options;
+    options.extra_keypoints_max = 150;
+    options.extra_min_instance_keypoints = min_instance_keypoints;
+    features::StereoFeatures f = f0;
+    f.left.descriptors = f0.left.descriptors.clone();
+    *report = tracking::ObjectKeypointExtractor(main_orb.options(), options)
+                  .extract(s.left, object_mask, s.cam, &f, instances);
+    int on_car = 0;
+    for (const cv::KeyPoint& k : f.left.keypoints) on_car += in_mask(s.mask, k.pt);
+    EXPECT_EQ(f.left.descriptors.rows, static_cast<int>(f.left.size()));
+    EXPECT_EQ(f.matches.depth.size(), f.left.size());
+    return on_car;
+  };
+  tracking::ObjectKeypointReport shared, second;
+  const int shared_only = on_car_after(0, &shared);
+  const int with_second = on_car_after(40, &second);
+  std::cout << "[ object keypoints ] car keypoints: shared budget " << shared_only
+            << ", with the second pass " << with_second << "\n";
+  EXPECT_EQ(shared.num_deprived, 0);
+  EXPECT_EQ(second.num_deprived, 1);  // the car; the large instance holds its share
+  EXPECT_LE(shared_only, 10);         // the premise: the shared budget leaves the car short
+  EXPECT_GE(with_second, shared_only + 15);
+  // instances of another type or size are refused
+  features::StereoFeatures f = f0;
+  const tracking::ObjectKeypointExtractor extra(main_orb.options(), tracking::ObjectTrackingOptions{});
+  for (const cv::Mat& bad : {cv::Mat(object_mask), cv::Mat(cv::Mat::ones(10, 10, CV_32SC1))})
+    EXPECT_THROW(extra.extract(s.left, object_mask, s.cam, &f, bad), std::invalid_argument);
+}
+
 // ---------------------------------------------------------------- FrameBuilder
 
 TEST(FrameBuilderObjectMask, ExtraKeypointsCarryLabelsAndNeverTrackTheCamera) {
