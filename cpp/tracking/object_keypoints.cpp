@@ -48,31 +48,38 @@ class SpacingGrid {
   std::vector<std::vector<cv::Point2f>> cells_;
 };
 
-// The object mask's pixels on instances holding fewer than min_keypoints of `keypoints`
-// (255; 0 elsewhere), and how many such instances there are.
+// The object mask's pixels on instances (ids > 0) of at least min_area_px pixels holding fewer than
+// min_keypoints of `keypoints` (255; 0 elsewhere), and how many such instances there are.
 cv::Mat deprived_instances_mask(const std::vector<cv::KeyPoint>& keypoints,
                                 const cv::Mat& object_mask, const cv::Mat& instances,
-                                int min_keypoints, int* num_deprived) {
-  std::unordered_map<int, int> count;
+                                int min_keypoints, int min_area_px, int* num_deprived) {
+  std::unordered_map<int, int> count, area;
   for (const cv::KeyPoint& k : keypoints) {
     const cv::Point p(static_cast<int>(std::lround(k.pt.x)), static_cast<int>(std::lround(k.pt.y)));
     if (p.x < 0 || p.y < 0 || p.x >= instances.cols || p.y >= instances.rows) continue;
     if (object_mask.at<std::uint8_t>(p.y, p.x)) ++count[instances.at<int>(p.y, p.x)];
   }
-  cv::Mat mask(object_mask.size(), CV_8UC1, cv::Scalar(0));
-  std::unordered_set<int> deprived;
-  for (int v = 0; v < mask.rows; ++v) {
+  for (int v = 0; v < object_mask.rows; ++v) {
     const std::uint8_t* on = object_mask.ptr<std::uint8_t>(v);
     const int* inst = instances.ptr<int>(v);
-    std::uint8_t* m = mask.ptr<std::uint8_t>(v);
-    for (int u = 0; u < mask.cols; ++u) {
-      if (!on[u]) continue;
-      const auto it = count.find(inst[u]);
-      if (it != count.end() && it->second >= min_keypoints) continue;
-      m[u] = 255;
-      deprived.insert(inst[u]);
-    }
+    for (int u = 0; u < object_mask.cols; ++u)
+      if (on[u] && inst[u] > 0) ++area[inst[u]];
   }
+  std::unordered_set<int> deprived;
+  for (const auto& [instance, pixels] : area) {
+    const auto it = count.find(instance);
+    if (pixels >= min_area_px && (it == count.end() || it->second < min_keypoints))
+      deprived.insert(instance);
+  }
+  cv::Mat mask(object_mask.size(), CV_8UC1, cv::Scalar(0));
+  if (!deprived.empty())
+    for (int v = 0; v < mask.rows; ++v) {
+      const std::uint8_t* on = object_mask.ptr<std::uint8_t>(v);
+      const int* inst = instances.ptr<int>(v);
+      std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+      for (int u = 0; u < mask.cols; ++u)
+        if (on[u] && deprived.count(inst[u])) m[u] = 255;
+    }
   *num_deprived = static_cast<int>(deprived.size());
   return mask;
 }
@@ -107,6 +114,7 @@ ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& mai
                                                  const ObjectTrackingOptions& options)
     : extractor_(mask_orb_options(main, options)), instance_pass_(mask_orb_options(main, options)),
       min_instance_keypoints_(options.extra_min_instance_keypoints),
+      min_instance_area_px_(options.extra_min_instance_area_px),
       min_spacing_px_(options.extra_min_spacing_px),
       left_right_check_(options.left_right_check),
       left_right_tolerance_px_(static_cast<float>(options.left_right_tolerance_px)) {
@@ -149,7 +157,8 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
     // the pass's budget is spread over the masks' area, so near cars take most of it; a small
     // or far instance left short gets its own share in a second pass over the short ones
     const cv::Mat deprived = deprived_instances_mask(left.keypoints, object_mask, instances,
-                                                     min_instance_keypoints_, &report.num_deprived);
+                                                     min_instance_keypoints_, min_instance_area_px_,
+                                                     &report.num_deprived);
     if (report.num_deprived > 0) {
       features::OrbOptions o = instance_pass_;
       o.num_features = std::min(report.num_deprived * min_instance_keypoints_, 100000);

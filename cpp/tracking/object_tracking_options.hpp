@@ -71,7 +71,8 @@ struct ObjectTrackingOptions {
   // extra keypoints inside object masks (tracking/object_keypoints.hpp)
   bool extra_keypoints = true;
   int extra_keypoints_max = 1000;     // per frame, over all object masks
-  int extra_min_instance_keypoints = 0;  // fewer on an instance: a second pass on its mask (0: off)
+  int extra_min_instance_keypoints = 40;  // fewer on a vehicle: a second pass on its mask (0: off)
+  int extra_min_instance_area_px = 1000;  // ... of vehicles covering at least this many pixels
   int extra_keypoint_levels = 2;      // pyramid levels of the pass (<= the frame's)
   int extra_fast_threshold = 7;       // grey levels
   int extra_cell_px = 10;             // FAST retry grid cell (level px)
@@ -136,6 +137,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("extra_keypoints", o.extra_keypoints, 0, 1);
   visit("extra_keypoints_max", o.extra_keypoints_max, 0, 100000);
   visit("extra_min_instance_keypoints", o.extra_min_instance_keypoints, 0, 100000);
+  visit("extra_min_instance_area_px", o.extra_min_instance_area_px, 0, 100000000);
   visit("extra_keypoint_levels", o.extra_keypoint_levels, 1, 32);
   visit("extra_fast_threshold", o.extra_fast_threshold, 1, 254);  // grey levels of 8 bits
   visit("extra_cell_px", o.extra_cell_px, 8, 4096);  // as OrbOptions::cell_size

@@ -68,15 +68,21 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
   Frame frame;
   const ObjectTrackingOptions& vo = options_.visual_objects;
   cv::Mat object_mask;  // where extra keypoints are extracted (object instances)
+  cv::Mat vehicle_instances;  // the instances that may get a second pass (planar-link classes)
   if (!instances.empty() && vo.enabled && vo.extra_keypoints) {
     if (instances.type() != CV_32SC1 || instances.size() != left.size())
       throw std::invalid_argument("instances: expected int32 instance ids of the image size");
-    if (labels.empty() || labels.size() == instances.size())
+    if (labels.empty() || labels.size() == instances.size()) {
       object_mask = object_class_mask(instances, labels, vo.object_class_ids);
+      if (vo.extra_min_instance_keypoints > 0) {
+        // vehicles only: a pedestrian's extra points seeded a ghost (crowded seed 0, classical)
+        vehicle_instances = cv::Mat::zeros(instances.size(), CV_32SC1);
+        instances.copyTo(vehicle_instances, object_class_mask(instances, labels, vo.planar_class_ids));
+      }
+    }
   }
-  FrameBuildReport built =
-      frame_builder_.build(index, timestamp, left, right, labels, points_c, &frame, object_mask,
-                           object_mask.empty() ? cv::Mat() : instances);
+  FrameBuildReport built = frame_builder_.build(index, timestamp, left, right, labels, points_c,
+                                                &frame, object_mask, vehicle_instances);
   result.timings_ms = std::move(built.timings_ms);
   result.num_lidar_depth = built.num_lidar_depth;
   StageTimer timer(&result);

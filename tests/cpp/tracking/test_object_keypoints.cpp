@@ -208,10 +208,12 @@ TEST(ObjectKeypointExtractor, AnInstanceTheSharedBudgetLeavesShortGetsASecondPas
   const cv::Mat object_mask = instances > 0;
   const features::OrbExtractor main_orb(features::OrbOptions{});
   const features::StereoFeatures f0 = features::extract_and_match(main_orb, s.left, s.right, s.cam);
-  auto on_car_after = [&](int min_instance_keypoints, tracking::ObjectKeypointReport* report) {
+  auto on_car_after = [&](int min_instance_keypoints, tracking::ObjectKeypointReport* report,
+                          int min_instance_area_px = 0) {
     tracking::ObjectTrackingOptions options;
     options.extra_keypoints_max = 150;
     options.extra_min_instance_keypoints = min_instance_keypoints;
+    options.extra_min_instance_area_px = min_instance_area_px;
     features::StereoFeatures f = f0;
     f.left.descriptors = f0.left.descriptors.clone();
     *report = tracking::ObjectKeypointExtractor(main_orb.options(), options)
@@ -231,6 +233,13 @@ TEST(ObjectKeypointExtractor, AnInstanceTheSharedBudgetLeavesShortGetsASecondPas
   EXPECT_EQ(second.num_deprived, 1);  // the car; the large instance holds its share
   EXPECT_LE(shared_only, 10);         // the premise: the shared budget leaves the car short
   EXPECT_GE(with_second, shared_only + 15);
+  // a mask smaller than the area floor gets no second pass
+  const int car_px = cv::countNonZero(s.mask);
+  tracking::ObjectKeypointReport small;
+  EXPECT_EQ(on_car_after(40, &small, car_px + 1), shared_only);
+  EXPECT_EQ(small.num_deprived, 0);
+  EXPECT_EQ(on_car_after(40, &small, car_px), with_second);
+  EXPECT_EQ(small.num_deprived, 1);
   // instances of another type or size are refused
   features::StereoFeatures f = f0;
   const tracking::ObjectKeypointExtractor extra(main_orb.options(), tracking::ObjectTrackingOptions{});
