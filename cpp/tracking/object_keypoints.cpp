@@ -110,6 +110,13 @@ cv::Mat object_class_mask(const cv::Mat& instances, const cv::Mat& labels,
   return mask;
 }
 
+cv::Mat instances_of_classes(const cv::Mat& instances, const cv::Mat& labels,
+                             const std::vector<int>& class_ids) {
+  cv::Mat out = cv::Mat::zeros(instances.size(), CV_32SC1);
+  instances.copyTo(out, object_class_mask(instances, labels, class_ids));
+  return out;
+}
+
 ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& main,
                                                  const ObjectTrackingOptions& options)
     : extractor_(mask_orb_options(main, options)), instance_pass_(mask_orb_options(main, options)),

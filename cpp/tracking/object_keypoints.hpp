@@ -29,6 +29,11 @@ struct ObjectKeypointReport {
 cv::Mat object_class_mask(const cv::Mat& instances, const cv::Mat& labels,
                           const std::vector<int>& object_class_ids);
 
+// The instance ids (CV_32SC1) of the pixels object_class_mask keeps for class_ids, 0 elsewhere:
+// the instances a second pass may serve (the vehicles).
+cv::Mat instances_of_classes(const cv::Mat& instances, const cv::Mat& labels,
+                             const std::vector<int>& class_ids);
+
 class ObjectKeypointExtractor {
  public:
   // main: the frame's ORB options (scale factor and levels are shared, so octaves agree).

@@ -76,8 +76,7 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
       object_mask = object_class_mask(instances, labels, vo.object_class_ids);
       if (vo.extra_min_instance_keypoints > 0) {
         // vehicles only: a pedestrian's extra points seeded a ghost (crowded seed 0, classical)
-        vehicle_instances = cv::Mat::zeros(instances.size(), CV_32SC1);
-        instances.copyTo(vehicle_instances, object_class_mask(instances, labels, vo.planar_class_ids));
+        vehicle_instances = instances_of_classes(instances, labels, vo.planar_class_ids);
       }
     }
   }

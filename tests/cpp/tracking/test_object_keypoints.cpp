@@ -52,6 +52,21 @@ TEST(ObjectClassMask, KeepsInstancePixelsOfTheListedClasses) {
   EXPECT_EQ(cv::countNonZero(tracking::object_class_mask(instances, labels, {})), 0);
 }
 
+TEST(InstancesOfClasses, KeepsTheIdsOfTheListedClassesOnly) {
+  // a car (instance 3, class 26) beside a person (instance 5, class 24) and road (class 7)
+  cv::Mat instances = cv::Mat::zeros(2, 3, CV_32SC1), labels = cv::Mat::zeros(2, 3, CV_32SC1);
+  const int ids[3] = {3, 5, 0}, classes[3] = {26, 24, 7};
+  for (int v = 0; v < 2; ++v)
+    for (int u = 0; u < 3; ++u) instances.at<int>(v, u) = ids[u], labels.at<int>(v, u) = classes[u];
+  const cv::Mat vehicles = tracking::instances_of_classes(instances, labels, {26, 27});
+  ASSERT_EQ(vehicles.type(), CV_32SC1);
+  for (int v = 0; v < 2; ++v) {
+    EXPECT_EQ(vehicles.at<int>(v, 0), 3);
+    EXPECT_EQ(vehicles.at<int>(v, 1), 0);  // the person gets no second pass
+    EXPECT_EQ(vehicles.at<int>(v, 2), 0);
+  }
+}
+
 TEST(ObjectClassMask, WrongTypesOrSizesThrow) {
   const cv::Mat instances = cv::Mat::ones(4, 5, CV_32SC1), labels = cv::Mat::ones(4, 5, CV_32SC1);
   for (const cv::Mat& bad : {cv::Mat(cv::Mat::ones(4, 5, CV_8UC1)), cv::Mat(cv::Mat::ones(4, 5, CV_16SC1))})
