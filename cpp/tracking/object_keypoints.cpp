@@ -48,8 +48,8 @@ class SpacingGrid {
   std::vector<std::vector<cv::Point2f>> cells_;
 };
 
-// The object mask's pixels on instances (ids > 0) of at least min_area_px pixels holding fewer than
-// min_keypoints of `keypoints` (255; 0 elsewhere), and how many such instances there are.
+// The object mask's pixels on instances (ids > 0) of at least min_area_px pixels holding fewer
+// than min_keypoints of `keypoints` (255; 0 elsewhere), and how many such instances there are.
 cv::Mat deprived_instances_mask(const std::vector<cv::KeyPoint>& keypoints,
                                 const cv::Mat& object_mask, const cv::Mat& instances,
                                 int min_keypoints, int min_area_px, int* num_deprived) {
@@ -119,7 +119,7 @@ cv::Mat instances_of_classes(const cv::Mat& instances, const cv::Mat& labels,
 
 ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& main,
                                                  const ObjectTrackingOptions& options)
-    : extractor_(mask_orb_options(main, options)), instance_pass_(mask_orb_options(main, options)),
+    : extractor_(mask_orb_options(main, options)),
       min_instance_keypoints_(options.extra_min_instance_keypoints),
       min_instance_area_px_(options.extra_min_instance_area_px),
       min_spacing_px_(options.extra_min_spacing_px),
@@ -161,13 +161,14 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
   const features::Keypoints extra = extractor_.extract(gray_left, object_mask);
   append(extra);
   if (!instances.empty() && min_instance_keypoints_ > 0) {
-    // the pass's budget is spread over the masks' area, so near cars take most of it; a small
-    // or far instance left short gets its own share in a second pass over the short ones
+    // the pass's budget is spread over the masks' area, so near cars take most of it; a
+    // vehicle left short gets its own share in a second pass over the short masks (not one
+    // under the area floor: a far car's SAD depths there were wrong, docs/visual_objects.md)
     const cv::Mat deprived = deprived_instances_mask(left.keypoints, object_mask, instances,
                                                      min_instance_keypoints_, min_instance_area_px_,
                                                      &report.num_deprived);
     if (report.num_deprived > 0) {
-      features::OrbOptions o = instance_pass_;
+      features::OrbOptions o = extractor_.options();
       o.num_features = std::min(report.num_deprived * min_instance_keypoints_, 100000);
       append(features::OrbExtractor(o).extract(gray_left, deprived));
     }

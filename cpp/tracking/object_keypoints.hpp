@@ -44,9 +44,9 @@ class ObjectKeypointExtractor {
   // depth of every object keypoint that has none; with the left-right check, every object
   // keypoint's depth is then checked back from the right image. Needs the left and right
   // pyramids of extract_and_match. Keypoints at index >= the old size are the new ones.
-  // instances (empty, or CV_32SC1 ids of the image size; <= 0: none): an instance whose mask then holds
-  // fewer than extra_min_instance_keypoints keypoints gets a second pass on its own mask, when
-  // it covers at least extra_min_instance_area_px pixels.
+  // instances (empty, or CV_32SC1 ids of the image size; <= 0: none): an instance whose mask
+  // then holds fewer than extra_min_instance_keypoints keypoints gets a second pass on its own
+  // mask, when it covers at least extra_min_instance_area_px pixels.
   ObjectKeypointReport extract(const cv::Mat& gray_left, const cv::Mat& object_mask,
                                const geometry::StereoCamera& camera,
                                features::StereoFeatures* features,
@@ -54,7 +54,6 @@ class ObjectKeypointExtractor {
 
  private:
   features::OrbExtractor extractor_;
-  features::OrbOptions instance_pass_;  // the second pass's options, but its budget
   int min_instance_keypoints_;
   int min_instance_area_px_;
   features::StereoSearchOptions search_;
