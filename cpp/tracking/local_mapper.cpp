@@ -5,12 +5,21 @@
 #include <utility>
 
 #include "geometry/se3.hpp"
+#include "geometry/so3.hpp"
 #include "tracking/local_bundle_adjustment.hpp"
 
 namespace twistslam::tracking {
 namespace {
 // ORB-SLAM2 requires this many tracked inliers before a keyframe is worth adding.
 constexpr int kMinKeyframeInliers = 15;
+
+// Whether the camera moved or turned past the temporal rule's floor since `reference`.
+bool moved_since(const Frame& frame, const map::KeyFrame& reference, const KeyframeOptions& k) {
+  const Mat4 T_ref_c = reference.T_c_w * geometry::se3_inverse(frame.T_c_w);
+  const double angle_deg = geometry::so3_log(T_ref_c.topLeftCorner<3, 3>()).norm() * 180.0 / M_PI;
+  return T_ref_c.topRightCorner<3, 1>().norm() >= k.temporal_min_translation_m ||
+         angle_deg >= k.temporal_min_rotation_deg;
+}
 }  // namespace
 
 LocalMapper::LocalMapper(const geometry::StereoCamera& camera, const SlamOptions& options, LevelWeights weights)
@@ -47,7 +56,8 @@ bool LocalMapper::need_keyframe(const Frame& frame, const map::Map& map, int ref
     else ++close_new;
   }
   const KeyframeOptions& k = keyframe_options_;
-  const bool temporal = frame.index - last_keyframe_frame_ >= k.max_frames_between;
+  const bool temporal = frame.index - last_keyframe_frame_ >= k.max_frames_between &&
+                        moved_since(frame, map.keyframe(reference_keyframe), k);
   // Reference: the keyframe's established points (seen by >= 2 keyframes, 3 once the map has
   // more than 2), not its fresh stereo points most of which the next frames never re-match.
   const size_t min_obs = map.num_keyframes() > 2 ? 3 : 2;

@@ -30,6 +30,11 @@ struct TrackingOptions {
 
 struct KeyframeOptions {
   int max_frames_between = 2;        // temporal keyframe (TwistSLAM)
+  // ... only once the camera has moved this far from the reference keyframe (m) or turned this
+  // much (deg): a stopped camera's keyframes repeat one view, give the BA nothing, and every
+  // one adds an observation to each point (per-keyframe cost grows with the stop's length)
+  double temporal_min_translation_m = 0.05;
+  double temporal_min_rotation_deg = 0.5;
   double min_tracked_ratio = 0.75;   // spatial: tracked points vs the reference keyframe
   int min_close_tracked = 100;       // few close points tracked ...
   int min_new_close = 70;            // ... and this many new close ones could be added
@@ -105,6 +110,9 @@ void for_each_option(TrackingOptions& o, Visit&& visit) {
 template <typename Visit>
 void for_each_option(KeyframeOptions& o, Visit&& visit) {
   visit("max_frames_between", o.max_frames_between, 1, 100000);  // frames: ~3 h at 10 Hz
+  // 0: every temporal keyframe, moving or not; 1 km / 180 deg: only the spatial rules
+  visit("temporal_min_translation_m", o.temporal_min_translation_m, 0.0, 1000.0);
+  visit("temporal_min_rotation_deg", o.temporal_min_rotation_deg, 0.0, 180.0);
   visit("min_tracked_ratio", o.min_tracked_ratio, 0.0, 1.0);
   visit("min_close_tracked", o.min_close_tracked, 0, 100000);  // points: extract_orb's limit
   visit("min_new_close", o.min_new_close, 0, 100000);

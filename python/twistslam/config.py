@@ -120,6 +120,15 @@ class KeyframeConfig:
         2, "temporal keyframe at least every 2 frames: the local BA is what removes the "
         "per-frame tracking noise (simulator: RPE halves from 5 to 2, at ~25 ms per frame)",
         "frames")
+    temporal_min_translation_m: float = param(
+        0.05, "... once the camera has moved this far from the reference keyframe (or turned "
+        "temporal_min_rotation_deg): a stopped camera's keyframes repeat one view and each adds "
+        "an observation to every point; stopped 300 frames (simulator), the loop slowed from "
+        "170 to 500 ms per frame. 0.05 m is 10x the per-frame tracking noise and skips none of "
+        "urban's keyframes (>= 0.9 m per 2 frames)", "m", lo=0.0, hi=1000.0)
+    temporal_min_rotation_deg: float = param(
+        0.5, "... or turned this much: a camera turning in place still gets its keyframes",
+        "deg", lo=0.0, hi=180.0)
     min_tracked_ratio: float = param(
         0.75, "spatial keyframe when tracked points drop below this fraction of the "
         "reference keyframe's (ORB-SLAM2 stereo)")

@@ -1,6 +1,7 @@
 // Local mapping on synthetic stereo frames: keypoints are exact projections of known 3D
 // points (no images), so each check isolates the component: a segment's first keyframe turns
-// its usable stereo keypoints into map points, the keyframe decision follows the temporal rule,
+// its usable stereo keypoints into map points, the keyframe decision follows the temporal rule
+// (and skips it while the camera stands still),
 // and a second keyframe matched to the first is bundle-adjusted against it (the first holds the
 // gauge), the BA pulling a perturbed pose back and reporting that it ran and its time.
 #include <gtest/gtest.h>
@@ -122,6 +123,43 @@ TEST(LocalMapper, KeyframeDecisionFollowsTheTemporalRule) {
   // ORB-SLAM2's floor: fewer than 15 tracked inliers never make a keyframe
   EXPECT_FALSE(mapper.need_keyframe(tracked_frame(2, 14), map, reference));
   EXPECT_FALSE(mapper.need_keyframe(tracked_frame(2, points.size()), map, -1));  // no reference
+}
+
+TEST(LocalMapper, AStoppedCameraGetsNoTemporalKeyframe) {
+  const std::vector<Vec3> points = scene_points();
+  tracking::LocalMapper mapper = make_mapper();  // temporal floor: 0.05 m or 0.5 deg
+  map::Map map;
+  tracking::Frame first = frame_seeing(points, 0);
+  const int reference = mapper.start_segment(first, map).keyframe_id;
+
+  // frame 5 seen from `T_c_w`: every point tracked, so only the temporal rule can fire
+  auto tracked_at = [&](const Mat4& T_c_w) {
+    tracking::Frame frame = frame_seeing(points, 5);
+    frame.T_c_w = T_c_w;
+    for (size_t i = 0; i < points.size(); ++i) frame.point_ids[i] = first.point_ids[i];
+    return frame;
+  };
+  auto moved = [&](double forward_m, double yaw_deg) {
+    Vec6 xi;
+    xi << 0, 0, forward_m, 0, yaw_deg * M_PI / 180.0, 0;
+    return geometry::se3_inverse(geometry::se3_exp(xi)) * first.T_c_w;
+  };
+  EXPECT_FALSE(mapper.need_keyframe(tracked_at(first.T_c_w), map, reference));  // standing still
+  EXPECT_FALSE(mapper.need_keyframe(tracked_at(moved(0.01, 0.1)), map, reference));  // tracking noise
+  EXPECT_TRUE(mapper.need_keyframe(tracked_at(moved(0.06, 0.0)), map, reference));  // creeping forward
+  EXPECT_TRUE(mapper.need_keyframe(tracked_at(moved(0.0, 0.6)), map, reference));  // turning in place
+
+  tracking::SlamOptions every_frame;  // 0: the temporal rule regardless of motion
+  every_frame.keyframes.temporal_min_translation_m = 0;
+  every_frame.keyframes.temporal_min_rotation_deg = 0;
+  tracking::LocalMapper always = make_mapper(every_frame);
+  map::Map map2;
+  tracking::Frame first2 = frame_seeing(points, 0);
+  const int reference2 = always.start_segment(first2, map2).keyframe_id;
+  tracking::Frame still = frame_seeing(points, 5);
+  still.T_c_w = first2.T_c_w;
+  for (size_t i = 0; i < points.size(); ++i) still.point_ids[i] = first2.point_ids[i];
+  EXPECT_TRUE(always.need_keyframe(still, map2, reference2));
 }
 
 TEST(LocalMapper, SecondKeyframeIsBundleAdjustedAgainstTheFirst) {
