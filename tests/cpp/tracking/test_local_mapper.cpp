@@ -139,7 +139,8 @@ TEST(LocalMapper, AStoppedCameraGetsNoTemporalKeyframe) {
     for (size_t i = 0; i < points.size(); ++i) frame.point_ids[i] = first.point_ids[i];
     return frame;
   };
-  auto moved = [&](double forward_m, double yaw_deg) {
+  // -> Mat4: an auto return would keep a product expression of destroyed temporaries
+  auto moved = [&](double forward_m, double yaw_deg) -> Mat4 {
     Vec6 xi;
     xi << 0, 0, forward_m, 0, yaw_deg * M_PI / 180.0, 0;
     return geometry::se3_inverse(geometry::se3_exp(xi)) * first.T_c_w;
