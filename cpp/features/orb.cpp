@@ -45,15 +45,27 @@ struct LevelArea {
   float sx, sy;          // level-0 px per level px
   const cv::Mat& mask;   // level-0 CV_8UC1 or empty
   cv::Mat level_mask;    // the mask at the level's size (nearest), empty without a mask
+  // Level pixels where an allowed corner may lie: the region, or with a mask its part around
+  // the mask's bounding box (FAST is run there only; the quadtree still spans the region).
+  cv::Rect search;
 
-  LevelArea(const cv::Mat& img, const cv::Size& size0, const cv::Mat& mask0)
+  LevelArea(const cv::Mat& img, const cv::Size& size0, const cv::Mat& mask0,
+            const cv::Rect& mask_box0)
       : region(kEdgeBorder, kEdgeBorder, img.cols - 2 * kEdgeBorder, img.rows - 2 * kEdgeBorder),
         level0(size0),
         sx(static_cast<float>(size0.width) / img.cols),
         sy(static_cast<float>(size0.height) / img.rows),
-        mask(mask0) {
-    if (!mask.empty() && region.width > 0 && region.height > 0)
-      cv::resize(mask, level_mask, img.size(), 0, 0, cv::INTER_NEAREST);
+        mask(mask0),
+        search(region) {
+    if (mask.empty() || region.width <= 0 || region.height <= 0) return;
+    cv::resize(mask, level_mask, img.size(), 0, 0, cv::INTER_NEAREST);
+    // the level-0 box in level pixels (x_l = (x_0 + 0.5) / s - 0.5), widened by 2 px for the
+    // rounding of allows() and of the nearest-neighbour level mask
+    const int x0 = static_cast<int>(std::floor((mask_box0.x + 0.5f) / sx - 0.5f)) - 2;
+    const int y0 = static_cast<int>(std::floor((mask_box0.y + 0.5f) / sy - 0.5f)) - 2;
+    const int x1 = static_cast<int>(std::ceil((mask_box0.br().x - 0.5f) / sx - 0.5f)) + 2;
+    const int y1 = static_cast<int>(std::ceil((mask_box0.br().y - 0.5f) / sy - 0.5f)) + 2;
+    search = region & cv::Rect(x0, y0, std::max(0, x1 - x0), std::max(0, y1 - y0));
   }
   cv::Point2f to_level0(const cv::Point2f& p) const {
     return {(p.x + 0.5f) * sx - 0.5f, (p.y + 0.5f) * sy - 0.5f};
@@ -76,12 +88,19 @@ void fast_in(const cv::Mat& img, const cv::Rect& roi, int threshold, std::vector
   for (cv::KeyPoint& k : *out) k.pt += offset;
 }
 
-// Step 1: FAST at the normal threshold over the whole level; the allowed corners.
+// Step 1: FAST at the normal threshold over the level's search area; the allowed corners.
 void detect_corners(const cv::Mat& img, const LevelArea& area, int threshold,
                     std::vector<cv::KeyPoint>* candidates) {
-  // FAST tests a ring of radius 3: a 3-px margin around the region is all it needs.
-  const cv::Rect& r = area.region;
-  fast_in(img, cv::Rect(r.x - 3, r.y - 3, r.width + 6, r.height + 6), threshold, candidates);
+  candidates->clear();
+  const cv::Rect& r = area.search;
+  if (r.width <= 0 || r.height <= 0) return;
+  // FAST tests a ring of radius 3 (so it scores the pixels of roi 3 px inside its edges), and
+  // its non-maximum suppression compares each corner with its 8 neighbours: with 4 px around
+  // r, the corners inside r are those of a FAST over the whole region (3 px around it).
+  const cv::Rect& g = area.region;
+  const cv::Rect roi = cv::Rect(r.x - 4, r.y - 4, r.width + 8, r.height + 8) &
+                       cv::Rect(g.x - 3, g.y - 3, g.width + 6, g.height + 6);
+  fast_in(img, roi, threshold, candidates);
   candidates->erase(std::remove_if(candidates->begin(), candidates->end(),
                                    [&](const cv::KeyPoint& k) { return !area.allows(k.pt); }),
                     candidates->end());
@@ -111,7 +130,7 @@ void retry_empty_cells(const cv::Mat& img, const LevelArea& area, int cell_size,
       const int y0 = region.y + static_cast<int>(std::lround(cy * ch));
       const int y1 = region.y + static_cast<int>(std::lround((cy + 1) * ch));
       const cv::Rect cell(x0, y0, x1 - x0, y1 - y0);
-      if (cell.area() <= 0) continue;
+      if (cell.area() <= 0 || (cell & area.search).area() <= 0) continue;
       if (!area.level_mask.empty() && cv::countNonZero(area.level_mask(cell)) == 0) continue;
       // FAST needs 3 px around a pixel
       const cv::Rect roi = cv::Rect(x0 - 3, y0 - 3, cell.width + 6, cell.height + 6) &
@@ -214,6 +233,8 @@ Keypoints OrbExtractor::extract(const cv::Mat& gray, const cv::Mat& mask) const 
   if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != gray.size()))
     throw std::invalid_argument("OrbExtractor::extract: mask must be CV_8UC1 of the image size");
 
+  // the mask's non-zero pixels lie in this box (level 0); an all-zero mask gives an empty box
+  const cv::Rect mask_box = mask.empty() ? cv::Rect(0, 0, gray.cols, gray.rows) : cv::boundingRect(mask);
   Keypoints out;
   out.scale_factor = options_.scale_factor;
   out.pyramid = build_pyramid(gray, options_.scale_factor, options_.num_levels);
@@ -236,7 +257,7 @@ Keypoints OrbExtractor::extract(const cv::Mat& gray, const cv::Mat& mask) const 
     const int wanted = per_level_[l] + carry;
     carry = wanted;
     if (wanted <= 0) continue;
-    const LevelArea area(img, gray.size(), mask);
+    const LevelArea area(img, gray.size(), mask, mask_box);
     if (area.region.width <= 0 || area.region.height <= 0) continue;
 
     detect_corners(img, area, options_.fast_threshold, &candidates);

@@ -128,6 +128,37 @@ TEST(OrbExtractor, NoKeypointWhereMaskIsZero) {
   EXPECT_GT(near_mask, 20);  // keypoints right up to the masked rectangle
 }
 
+// FAST runs only around the mask's bounding box (orb.cpp, LevelArea::search): a mask whose box
+// spans the whole image (one extra pixel on a flat patch far away) must give the very same
+// keypoints and descriptors as the tight mask, corners at the mask's edge (whose non-maximum
+// suppression reads pixels outside it) included.
+TEST(OrbExtractor, AMasksBoundingBoxLimitsTheSearchNotTheResult) {
+  cv::Mat img = test::to_u8(test::random_texture(1242, 375, 11));
+  img(cv::Rect(1080, 280, 80, 60)).setTo(128);  // flat: no corner there
+  cv::Mat tight(img.size(), CV_8U, cv::Scalar(0));
+  cv::rectangle(tight, cv::Rect(430, 120, 180, 110), cv::Scalar(255), cv::FILLED);
+  cv::circle(tight, cv::Point(700, 200), 40, cv::Scalar(255), cv::FILLED);
+  cv::Mat wide = tight.clone();
+  wide.at<std::uint8_t>(310, 1120) = 255;
+  OrbOptions o;
+  o.num_features = 600;
+  o.fast_threshold = 7;
+  o.cell_size = 10;
+  o.num_levels = 3;
+  const OrbExtractor extractor(o);
+  const Keypoints a = extractor.extract(img, tight), b = extractor.extract(img, wide);
+  ASSERT_GT(a.size(), 300u);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a.keypoints[i].pt, b.keypoints[i].pt) << i;
+    EXPECT_EQ(a.keypoints[i].octave, b.keypoints[i].octave) << i;
+    EXPECT_EQ(a.keypoints[i].response, b.keypoints[i].response) << i;
+  }
+  EXPECT_EQ(cv::norm(a.descriptors, b.descriptors, cv::NORM_HAMMING), 0.0);
+  // an all-zero mask finds nothing (an empty box), without an error
+  EXPECT_TRUE(extractor.extract(img, cv::Mat::zeros(img.size(), CV_8U)).keypoints.empty());
+}
+
 TEST(OrbExtractor, OrientationAndDescriptorFollowARotation) {
   // A 90-degree rotation is an exact pixel permutation: each keypoint must reappear at the
   // rotated position with its angle turned by 90 degrees and a nearly equal descriptor.
