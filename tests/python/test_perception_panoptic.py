@@ -125,6 +125,25 @@ def test_sim_reader_and_result_errors(tmp_path):
         SimPanopticFiles(tmp_path / "missing")
 
 
+def test_sixteen_bit_ids_decode_as_the_integer_arithmetic_does():
+    """16-bit PNG values go through lookup tables; every code, stuff and things, the largest
+    included, must decode as the int64 path does, and an unknown class still names itself."""
+    rng = np.random.default_rng(0)
+    codes = np.array([0, 7, 11, 23, 24000, 26001, 26999, 33000, 26005, 24017], np.uint16)
+    ids = rng.choice(codes, size=(40, 50)).astype(np.uint16)
+    fast = Panoptic.from_cityscapes_ids(ids)
+    slow = Panoptic.from_cityscapes_ids(ids.astype(np.int64))
+    assert fast.class_id.dtype == slow.class_id.dtype == np.int32
+    np.testing.assert_array_equal(fast.class_id, slow.class_id)
+    np.testing.assert_array_equal(fast.instance_id, slow.instance_id)
+    assert fast.instance_id.max() == 33000 and fast.class_id[ids == 26005].tolist() == [26] * int(
+        (ids == 26005).sum())
+    with pytest.raises(ValueError, match=r"class_id \[65\] not in the Cityscapes vocabulary"):
+        Panoptic.from_cityscapes_ids(np.full((2, 2), 65535, np.uint16))
+    with pytest.raises(ValueError, match=r"class_id \[-3\] not in the Cityscapes vocabulary"):
+        Panoptic(np.full((2, 2), -3), np.zeros((2, 2), int))  # negative: the np.unique path
+
+
 def test_source_choice_and_stage_output_checks(sim_sequence, tmp_path):
     assert isinstance(panoptic_source("auto", sim_sequence), SimPanopticFiles)
     with pytest.raises(ValueError, match="expected one of auto, files, coco, boxes"):
