@@ -73,6 +73,7 @@ def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | Non
     (the PNG decoder, OpenCV and the core all release the GIL). The detector runs once per
     frame: its boxes make the masks from boxes and feed the LiDAR fusion."""
     previous: list[Frame | None] = [None]
+    previous_instances: list[np.ndarray | None] = [None]
     first_shape: list[tuple[int, int] | None] = [None]
 
     def load(i: int) -> _Loaded:
@@ -100,9 +101,11 @@ def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | Non
             ms["segmentation"] = (time.perf_counter() - start) * 1e3
         if perception.flow is not None:
             start = time.perf_counter()
-            flow = perception.optical_flow(previous[0], frame)
+            # the flow serves the object search: DIS runs on the box around both frames'
+            # instances (DisOptions.object_region)
+            flow = perception.optical_flow(previous[0], frame, (previous_instances[0], instance_ids))
             ms["flow"] = (time.perf_counter() - start) * 1e3
-        previous[0] = frame
+        previous[0], previous_instances[0] = frame, instance_ids
         return _Loaded(frame, class_ids, instance_ids, flow, ms,
                        detections if perception.fuse_detections else None)
 

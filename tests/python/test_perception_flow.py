@@ -11,6 +11,8 @@ from twistslam import _core
 from twistslam.datasets import Frame, KittiTracking
 from twistslam.perception import (DisFlow, FileFlow, TimedStage, flow_source, read_flo, read_kitti_flow, write_flo,
                                   write_kitti_flow)
+from twistslam.perception.flow import object_region
+from twistslam.perception.run_stages import Perception
 from twistslam.sim.generate import generate
 from twistslam.sim.png16 import write_png16
 
@@ -111,6 +113,67 @@ def test_dis_recovers_a_synthetic_shift(du, dv):
     assert flow.shape == (120, 256, 2) and flow.dtype == np.float32
     inner = flow[16:-16, 16:-16]  # borders: the shifted content wraps around
     assert abs(np.median(inner[..., 0]) - du) < 0.2 and abs(np.median(inner[..., 1]) - dv) < 0.2
+
+
+def test_object_region_boxes_every_instance_with_a_margin():
+    a, b = np.zeros((100, 200), np.int32), np.zeros((100, 200), np.int32)
+    a[40:50, 60:70] = 26001
+    b[45:60, 150:160] = 26002
+    assert object_region((a, b), margin_px=5) == (55, 35, 165, 65)
+    assert object_region((None, b), margin_px=0) == (150, 45, 160, 60)
+    assert object_region((a, b), margin_px=80) == (0, 0, 200, 100)  # clipped to the image
+    assert object_region((np.zeros_like(a), None)) is None  # no instance: no box
+    assert object_region((None, None)) is None
+
+
+def test_dis_on_a_region_is_nan_outside_and_dis_of_the_crop_inside():
+    base = textured(120, 256, seed=5)
+    lo, hi = base.min(), base.max()
+    prev, cur = to_u8(base, lo, hi), to_u8(shift(base, 2.5, -1.0), lo, hi)
+    rgb = np.repeat(prev[..., None], 3, axis=2), np.repeat(cur[..., None], 3, axis=2)
+    region = (40, 20, 200, 100)
+    flow = DisFlow()(frame(0, rgb[0]), frame(1, rgb[1]), region=region)
+    assert flow.shape == (120, 256, 2) and flow.dtype == np.float32
+    inside = np.zeros((120, 256), bool)
+    inside[20:100, 40:200] = True
+    assert np.isnan(flow[~inside]).all() and np.isfinite(flow[inside]).all()
+    crop = _core.perception.dis_flow(np.ascontiguousarray(rgb[0][20:100, 40:200]),
+                                     np.ascontiguousarray(rgb[1][20:100, 40:200]))
+    np.testing.assert_array_equal(flow[20:100, 40:200], crop)
+    inner = flow[36:84, 56:184]
+    assert abs(np.median(inner[..., 0]) - 2.5) < 0.2 and abs(np.median(inner[..., 1]) + 1.0) < 0.2
+    for bad in ((0, 0, 0, 10), (10, 10, 300, 20), (-1, 0, 5, 5)):
+        with pytest.raises(ValueError, match="is not a non-empty box inside the 256x120 image"):
+            DisFlow()(frame(0, rgb[0]), frame(1, rgb[1]), region=bad)
+
+
+def test_the_instances_go_only_to_sources_that_take_them():
+    img = np.zeros((100, 120, 3), np.uint8)
+    previous_ids, current_ids = np.zeros((100, 120), np.int32), np.zeros((100, 120), np.int32)
+    current_ids[94:96, 55:57] = 26001  # a 2 px instance near the bottom edge
+    calls = []
+
+    def user_flow(previous, current):  # a user's two-argument stage
+        calls.append((previous.index, current.index))
+        return np.ones((100, 120, 2), np.float32)
+
+    out = Perception(flow=user_flow, flow_name="mine").optical_flow(
+        frame(0, img), frame(1, img), instances=(previous_ids, current_ids))
+    assert calls == [(0, 1)] and (out == 1).all()
+    # DIS: the instance's box, 5 px around it, widened to 64 px (DIS refuses images under its
+    # patch size) inside the image
+    dis = Perception(flow=DisFlow(region_margin_px=5), flow_name="dis").optical_flow(
+        frame(0, img), frame(1, img), instances=(previous_ids, current_ids))
+    computed = np.isfinite(dis[..., 0])
+    assert computed[36:100, 24:88].all() and computed.sum() == 64 * 64
+    whole = DisFlow(object_region=False)(frame(0, img), frame(1, img),
+                                         instances=(previous_ids, current_ids))
+    no_instance = DisFlow()(frame(0, img), frame(1, img), instances=(previous_ids, None))
+    assert np.isfinite(whole).all() and np.isfinite(no_instance).all()
+    small = DisFlow()(frame(0, img[:20, :30]), frame(1, img[:20, :30]), region=(0, 0, 5, 5))
+    assert np.isfinite(small).all()  # an image under 64 px: the whole of it
+    with pytest.raises(ValueError, match="region_margin_px = -1"):
+        DisFlow(region_margin_px=-1)
 
 
 def test_dis_rejects_bad_images_and_options():

@@ -111,11 +111,19 @@ class Perception:
                             f"{frame.index}, got {type(result).__name__}")
         return result
 
-    def optical_flow(self, previous, current) -> np.ndarray | None:
+    def optical_flow(self, previous, current, instances=None) -> np.ndarray | None:
+        """The flow from ``previous`` to ``current``; ``None`` when off or at the first frame.
+        ``instances``: both frames' instance images, given to the sources that take them
+        (``accepts_instances``: DIS, which then computes only around them; the flow serves
+        the object search alone)."""
         if self.flow is None or previous is None:
             return None
         shape = np.asarray(current.image_left).shape[:2]
-        return np.ascontiguousarray(check_flow(self.flow(previous, current), shape, self.flow_name))
+        if instances is not None and getattr(self.flow, "accepts_instances", False):
+            flow = self.flow(previous, current, instances=instances)
+        else:
+            flow = self.flow(previous, current)
+        return np.ascontiguousarray(check_flow(flow, shape, self.flow_name))
 
 
 def _segmentation_kind(kind, sequence) -> Any:
