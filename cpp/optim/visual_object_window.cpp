@@ -125,6 +125,7 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
   // track's (the final smoothing) is banded by e_const and the points' short lives
   so.linear_solver_override = n <= kDenseSchurMaxFrames ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
   so.initial_trust_region_radius = 1e4;
+  so.function_tolerance = o.function_tolerance;
   const detail::SolveSummary s = b.solve(so);
   out.usable = s.usable;
   out.iterations = s.iterations;

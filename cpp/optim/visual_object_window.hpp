@@ -100,6 +100,8 @@ struct VisualObjectWindowOptions {
   bool use_heading = true;               // e_head where the window has a travel axis
   bool refine_points = true;
   int max_iterations = 5;
+  // Ceres stops once an iteration changes the cost by less than this fraction of it
+  double function_tolerance = 1e-6;
   double min_depth = 0.1;                // m
 };
 

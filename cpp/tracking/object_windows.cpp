@@ -91,6 +91,7 @@ optim::VisualObjectWindowOptions ObjectTracker::window_options(const objects::Ob
   wo.const_rotation_reference_step_m = options_.const_rotation_reference_step_m;
   wo.const_rotation_min_fraction = options_.const_rotation_min_fraction;
   wo.max_iterations = options_.window_iterations;
+  wo.function_tolerance = options_.window_function_tolerance;
   return wo;
 }
 

@@ -98,6 +98,25 @@ TEST(VisualObjectWindow, HeadingTermRemovesTheYawDriftOfACarSeenFromBehind) {
         << "frame " << f;
 }
 
+// function_tolerance: Ceres stops once an iteration lowers the cost by less than that fraction
+// of it. A loose tolerance takes fewer iterations and still lands near the converged answer.
+TEST(VisualObjectWindow, AFunctionToleranceStopsTheWindowEarlier) {
+  const Mat6 Pi = geometry::projector_planar(kUp);
+  VisualObjectWindowOptions o;
+  o.max_iterations = 50;
+  LeadCarScene strict = lead_car(8, 1.0, 5), loose = lead_car(8, 1.0, 5);
+  strict.window.travel_axis_o = loose.window.travel_axis_o = Vec3(0, 0, 1);
+  o.function_tolerance = 1e-12;
+  const VisualObjectWindowSummary a = refine_visual_object_window(test_scenes::kitti_camera(), strict.window, Pi, o);
+  o.function_tolerance = 1e-2;
+  const VisualObjectWindowSummary b = refine_visual_object_window(test_scenes::kitti_camera(), loose.window, Pi, o);
+  ASSERT_TRUE(a.usable && b.usable);
+  EXPECT_LT(b.iterations, a.iterations);
+  EXPECT_LT(b.final_cost, b.initial_cost);
+  EXPECT_LT(b.final_cost, 1.05 * a.final_cost + 1e-9);  // within 5 % of the converged cost
+  EXPECT_LT(yaw_error_deg(loose.window.T_w_o.back(), loose.T_w_o_true.back()), 1.0);
+}
+
 TEST(VisualObjectWindow, NoTravelAxisOrTheTermOffAddsNoHeadingResidual) {
   const Mat6 Pi = geometry::projector_planar(kUp);
   VisualObjectWindowOptions o;
