@@ -249,6 +249,9 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
     }
     optim::VisualObjectWindowOptions wo = window_options(track);
     wo.max_iterations = options_.smoothing_iterations;
+    // Ceres' default, not the window's looser one: with boxes the whole-track problem gains
+    // from its iterations (config.py, smoothing_iterations and window_function_tolerance)
+    wo.function_tolerance = optim::VisualObjectWindowOptions().function_tolerance;
     // with LiDAR terms, the boxes and scans carry the motion; a point's errors repeat over
     // the frames that see it, which one problem over the whole track would count as
     // independent (ObjectLidarOptions::smoothing_keypoint_sigma_scale)
