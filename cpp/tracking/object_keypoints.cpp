@@ -8,7 +8,6 @@
 #include <unordered_map>
 #include <unordered_set>
 
-
 namespace twistslam::tracking {
 namespace {
 

@@ -23,6 +23,10 @@ from twistslam.datasets import Frame
 class FlowStage(Protocol):
     """Optical flow from the left image of ``previous`` to the one of ``current``.
 
+    A source whose class sets ``accepts_instances = True`` is also given
+    ``instances=(previous_ids, current_ids)``, both frames' instance images (either may be
+    ``None``), by a run: DIS uses them to compute only around the objects.
+
     Returns
     -------
     (H, W, 2) float32 array of (u, v) in pixels, NaN where the source has no value.
