@@ -31,6 +31,9 @@ struct TrackFrame {
   Vec6 xi = Vec6::Zero();         // twist to the next frame (zero for the last frame)
   bool detected = false;          // a detection was associated in this frame
   Mat4 T_w_o_detected = Mat4::Identity();  // that detection's box pose, heading aligned
+  // the detector's own heading of that box (its x axis in w, before the alignment); zero when
+  // the detector knows the heading mod pi only (Detection::point_extent: the classical one)
+  Vec3 detected_heading_w = Vec3::Zero();
   Vec3 detected_size = Vec3::Zero();       // its l, w, h (m)
   double score = 0;               // its score (the detector's)
   double range = 0;               // its distance from the camera, m

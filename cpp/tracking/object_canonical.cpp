@@ -2,7 +2,8 @@
 // with a cluster sets its object frame (the box frame); the frame then turns by pi if the car
 // drives backwards in it (a LiDAR box's heading is known mod pi), and is re-anchored to the
 // weighted mean offset of all its boxes (objects/box_offset.hpp): the first box alone leaves
-// its own noise (the simulator's oracle: ~0.1 m, ~2 deg) in every pose of the track.
+// its own noise (the simulator's oracle: ~0.1 m, ~2 deg) in every pose of the track. A car
+// that does not move faces the way most of its boxes do (detectors that know the heading).
 #include <algorithm>
 
 #include "geometry/se3.hpp"
@@ -48,12 +49,33 @@ void ObjectTracker::check_heading_from_motion(int c) {
       centres.push_back({row.frame, row.T_w_o_detected.topRightCorner<3, 1>()});
   const objects::BoxTravel travel = objects::box_travel(centres);
   if (!travel.valid || travel.inliers < kHeadingMinBoxes ||
-      travel.distance_m < lidar_options_.heading_from_motion_m)
+      travel.distance_m < lidar_options_.heading_from_motion_m ||
+      travel.distance_m < lidar_options_.heading_motion_min_sigmas * travel.distance_sigma_m)
     return;
   track.heading_from_motion = true;
-  if (track.last().T_w_o.block<3, 1>(0, 0).dot(travel.velocity_w) >= 0) return;
-  // a car drives forward: its box frame faced backwards (a LiDAR box's heading is known mod
-  // pi); the frame turns by pi about its y axis, and the boxes aligned with it turn too
+  // a car drives forward: its box frame faced backwards (a LiDAR box's heading is known mod pi)
+  if (track.last().T_w_o.block<3, 1>(0, 0).dot(travel.velocity_w) < 0) turn_canonical_around(c);
+}
+
+void ObjectTracker::check_heading_from_votes(int c) {
+  objects::ObjectTrack& track = tracks_[c];
+  if (!lidar_options_.heading_from_votes) return;
+  // the first box set the frame: a box whose heading is off by pi (the simulator's oracle: 2 %
+  // of its boxes; a learned detector's front / back confusion) turned a parked car's whole
+  // track around, and a car that never moves has no motion to turn it back (urban seed 4's
+  // car 20: yaw 180 deg in every frame). Each box votes with its own heading in its frame.
+  // One box, one vote: scores are not comparable across detectors (PointRCNN's may be negative).
+  int agree = 0, against = 0;
+  for (const objects::TrackFrame& row : track.frames) {
+    if (!row.has_detection() || row.detected_heading_w.isZero()) continue;
+    ++(row.detected_heading_w.dot(row.T_w_o.block<3, 1>(0, 0)) >= 0 ? agree : against);
+  }
+  if (agree + against >= kHeadingMinBoxes && against > agree) turn_canonical_around(c);
+}
+
+void ObjectTracker::turn_canonical_around(int c) {
+  objects::ObjectTrack& track = tracks_[c];
+  // the frame turns by pi about its y axis, and the boxes aligned with it turn too
   make_canonical(c, objects::turned_around(track.last().T_w_o));
   for (objects::TrackFrame& row : track.frames)
     if (row.has_detection()) row.T_w_o_detected = objects::turned_around(row.T_w_o_detected);

@@ -145,6 +145,8 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
   detection_used_[d] = 1;
   const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
   Mat4 T_w_box = T_w_c * det.box.pose();
+  // the detector's heading, before it is aligned with the track's (a point extent's is mod pi)
+  const Vec3 detected_heading_w = det.point_extent ? Vec3::Zero() : Vec3(T_w_box.block<3, 1>(0, 0));
   const Vec3 open_end_w = static_cast<double>(det.open_end) * T_w_box.block<3, 1>(0, 0);  // before any turn
   // a point extent that measured its length: its far end is the one away from the camera
   Vec3 far_end_w = Vec3::Zero();
@@ -184,6 +186,7 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
     }
   }
   row.T_w_o_detected = T_w_box;
+  row.detected_heading_w = detected_heading_w;
   row.detected_size = Vec3(det.box.length, det.box.width, det.box.height);
   row.open_end_w = open_end_w;
   row.far_end_w = far_end_w;
@@ -193,6 +196,7 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
   row.range = det.box.center.norm();
   row.detection_index = d;  // before the heading check: a turn turns this frame's box too
   if (track.canonical && !track.heading_from_motion) check_heading_from_motion(c);
+  if (track.canonical && !track.heading_from_motion) check_heading_from_votes(c);
   track.update_size(lidar_options_.point_extent_length_quantile);
   if (track.canonical_frame != row.frame) refine_canonical(c);
 }

@@ -22,6 +22,8 @@ struct ObjectLidarOptions {
   double detection_min_score = -1e9;       // detections below this are ignored
   bool canonical_pose = true;              // the first associated box sets the object frame
   double heading_from_motion_m = 1.5;      // travelled this far, a box frame facing backwards turns
+  double heading_motion_min_sigmas = 5.0;  // ... and this many standard errors of the distance
+  bool heading_from_votes = true;          // until then, it faces the way most of its boxes do
   // the canonical frame re-anchored to the mean offset of all its boxes (objects/box_offset.hpp)
   bool refine_canonical = true;
   double refine_min_range_m = 5.0;         // box weight 1 / max(range, this)^2
@@ -83,6 +85,8 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("detection_min_score", o.detection_min_score, -1e9, 1e9);
   visit("canonical_pose", o.canonical_pose, 0, 1);
   visit("heading_from_motion_m", o.heading_from_motion_m, 0.0, 1e6);
+  visit("heading_motion_min_sigmas", o.heading_motion_min_sigmas, 0.0, 1e6);
+  visit("heading_from_votes", o.heading_from_votes, 0, 1);
   visit("refine_canonical", o.refine_canonical, 0, 1);
   visit("refine_min_range_m", o.refine_min_range_m, 0.01, 1000.0);
   visit("refine_min_shift_m", o.refine_min_shift_m, 0.0, 100.0);

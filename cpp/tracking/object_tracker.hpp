@@ -148,6 +148,11 @@ class ObjectTracker : public ObjectBundleTerms {
   void make_canonical(int c, const Mat4& T_w_box);
   // Once it has moved heading_from_motion_m, a canonical frame facing backwards turns.
   void check_heading_from_motion(int c);
+  // A canonical track that has not moved that far (a parked or waiting car) faces the way
+  // most of its boxes' own headings do (weighted by score; detectors that know the heading).
+  void check_heading_from_votes(int c);
+  // Turns cluster c's canonical frame by pi about its y axis, with the boxes aligned to it.
+  void turn_canonical_around(int c);
   // the canonical frame moved to the weighted mean offset of all the track's boxes
   void refine_canonical(int c);
   // LiDAR registration (object_scans.cpp): cluster c's object scan of this frame (points of

@@ -73,6 +73,20 @@ class LidarObjectsConfig:
         "forward. A canonical track moves with its boxes (~0.1 m scatter), so 1.5 m is >10 "
         "sigmas; classical detector, urban / crowded seeds 0 and 2: yaw error 25 / 0.5 / 0.5 / "
         "45 deg at 3 m, 5.9 / 0.5 / 0.5 / 45 at 1.5 m (a slow car never moved 3 m)", "m")
+    heading_motion_min_sigmas: float = param(
+        5.0, "... and at least this many standard errors of that distance (the box centres' "
+        "scatter about their fitted line, objects/box_travel.hpp): a far car's boxes scatter by "
+        "~0.6 m, and a car that crept 0.5 m at 55 m seemed to have driven 1.5 m backwards (urban "
+        "s4's car 20, turned around for good: yaw 180 deg). Simulated 12-box tracks at 0.6 m "
+        "scatter: a parked car passes 4 / 5 / 6 sigmas in 0.8 / 0.1 / 0.0 % of trials, one "
+        "driving 0.5 m/frame in 98 / 95 / 91 % (the check repeats every frame: a rare pass "
+        "still turns a track)", "sigmas", lo=0.0, hi=1e6)
+    heading_from_votes: bool = param(
+        True, "until it has moved heading_from_motion_m, a canonical track faces the way most of "
+        "its boxes' own headings do (one box, one vote; the classical detector's point-extent "
+        "boxes know the heading mod pi only and do not vote): the first box alone set it, and "
+        "the oracle's 2 % boxes off by pi turned a car waiting at a light around for good "
+        "(urban s4's car 20, yaw 180 deg in every frame)")
     refine_canonical: bool = param(
         True, "each new box re-anchors the canonical frame to the weighted mean offset of all "
         "the track's boxes to their poses: the first box alone leaves its noise (the "

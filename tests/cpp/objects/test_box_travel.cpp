@@ -3,6 +3,7 @@
 // parked car travels ~nothing, and one frame gives no direction.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 #include <random>
 
@@ -53,4 +54,38 @@ TEST(BoxTravel, AParkedCarTravelsNothingAndOneFrameIsNoDirection) {
   EXPECT_FALSE(box_travel({}).valid);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(box_travel({{1, Vec3(nan, 0, 0)}, {2, Vec3(1, 0, 0)}}).valid);  // NaN left out
+}
+
+TEST(BoxTravel, TheDistancesStandardErrorTellsScatterFromTravel) {
+  // a far car's boxes (55 m) scatter by ~0.6 m a frame: a parked car or one creeping
+  // 0.04 m/frame seems to travel metres, but not by five standard errors (and never the wrong
+  // way by many); a car driving 0.5 m/frame does
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.6);
+  int apparent = 0, parked_significant = 0, creeping_backwards = 0, driving_significant = 0;
+  constexpr int kTrials = 500;
+  auto significant = [](const BoxTravel& t) { return t.distance_m > 5 * t.distance_sigma_m; };
+  for (int trial = 0; trial < kTrials; ++trial) {
+    std::vector<BoxCentre> parked, creeping, driving;
+    for (int f = 0; f < 12; ++f) {
+      const Vec3 start(12, 1.6, 55);
+      parked.push_back({f, start + Vec3(noise(rng), 0, noise(rng))});
+      creeping.push_back({f, start + Vec3(-0.04 * f + noise(rng), 0, noise(rng))});
+      driving.push_back({f, start + Vec3(-0.5 * f + noise(rng), 0, noise(rng))});
+    }
+    const BoxTravel p = box_travel(parked), c = box_travel(creeping), d = box_travel(driving);
+    ASSERT_TRUE(p.valid && c.valid && d.valid);
+    apparent += p.distance_m > 1.5;
+    parked_significant += significant(p);
+    creeping_backwards += significant(c) && c.velocity_w.x() > 0;
+    driving_significant += significant(d) && d.velocity_w.x() < 0;
+  }
+  EXPECT_GT(apparent, kTrials / 20);  // the distance alone is fooled, often
+  EXPECT_LE(parked_significant, 2);
+  EXPECT_LE(creeping_backwards, 1);
+  EXPECT_GE(driving_significant, kTrials * 90 / 100);
+  // too few boxes to tell their scatter
+  const BoxTravel three = box_travel({{0, Vec3(0, 0, 0)}, {1, Vec3(1, 0, 0)}, {2, Vec3(2.1, 0, 0)}});
+  ASSERT_TRUE(three.valid);
+  EXPECT_TRUE(std::isinf(three.distance_sigma_m));
 }

@@ -267,6 +267,42 @@ TEST_F(DetectionFusion, BoxFacingBackwardsTurnsAroundOnceTheCarHasMoved) {
   EXPECT_GT(box_x.dot(car.pose(9).block<3, 1>(0, 0)), 0.99);
 }
 
+TEST_F(DetectionFusion, AParkedCarFacesTheWayMostOfItsBoxesDo) {
+  // the first box's heading is off by pi (the oracle's 2 % flips); the car never moves, so no
+  // motion can turn its frame back: the later boxes' own headings outvote the first one
+  const Car car = make_car(rng, Vec3(-3, 0.5, 16), Vec3::Zero(), 0.0);
+  Boxes boxes;
+  boxes.first_yaw = M_PI;
+  const auto voted = track_one_car(car, boxes, 8);
+  ASSERT_EQ(voted.tracks().size(), 1u);
+  EXPECT_FALSE(voted.tracks()[0].heading_from_motion);
+  expect_canonical(voted.tracks()[0], voted.clusters()[0], car, 0.05);
+  // without the votes the first box's frame stays, turned around
+  tracking::ObjectLidarOptions lidar;
+  lidar.heading_from_votes = false;
+  auto first_box = make_tracker({}, lidar);
+  std::vector<tracking::ObjectTrackingReport> reports;
+  run_with_boxes(first_box, car, background, 8, boxes, rng, &reports);
+  ASSERT_EQ(first_box.tracks().size(), 1u);
+  const Vec3 x_axis = first_box.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
+  EXPECT_LT(x_axis.dot(car.pose(7).block<3, 1>(0, 0)), -0.99);
+}
+
+TEST_F(DetectionFusion, PointExtentBoxesDoNotVoteOnTheHeading) {
+  // the classical detector's boxes know the heading mod pi: a parked car whose later boxes
+  // all face backwards keeps the frame of its first box (the right one here)
+  const Car car = make_car(rng, Vec3(-3, 0.5, 16), Vec3::Zero(), 0.0);
+  Boxes boxes;
+  boxes.extra_yaw = M_PI;
+  boxes.first_yaw = M_PI;  // the first box: 2 pi, the car's heading
+  boxes.far_end_shortfall_m = 0.01;
+  boxes.point_extent = true;
+  const auto tracker = track_one_car(car, boxes, 8);
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const Vec3 x_axis = tracker.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
+  EXPECT_GT(x_axis.dot(car.pose(7).block<3, 1>(0, 0)), 0.99);
+}
+
 TEST_F(DetectionFusion, QuarterTurnedPriorLengthBoxesPlaceNothing) {
   // frames 3-8 of 14: the box is a quarter turn off with the prior's length (a partly hidden
   // L-shape read as a rear); those boxes keep the track but must not turn its frame
