@@ -34,6 +34,12 @@ struct ObjectLidarOptions {
   // a track whose origin lies in another's box (grown by this) this frame and that has fewer
   // boxes is not reported in it (two clusters on one car); < 0: never
   double duplicate_margin_m = 0.3;
+  // a canonical track without a box this frame is not reported when at least see_through_min_rays
+  // returns (0: off), and see_through_ratio times those inside, lie beyond its box (shrunk by
+  // see_through_shrink_m) on rays crossing it (objects/box_free_space.hpp)
+  int see_through_min_rays = 10;
+  double see_through_ratio = 3.0;
+  double see_through_shrink_m = 0.3;
   // point-extent boxes (Detection::point_extent) laid from their near end, the car's length
   // from this quantile of theirs (off: every box as an estimate, the median length)
   bool point_extent_lengths = false;
@@ -94,6 +100,9 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("refine_min_agreement", o.refine_min_agreement, 0.0, 1.0);
   visit("refine_min_boxes", o.refine_min_boxes, 2, 1000000);
   visit("duplicate_margin_m", o.duplicate_margin_m, -1.0, 10.0);
+  visit("see_through_min_rays", o.see_through_min_rays, 0, 1000000);
+  visit("see_through_ratio", o.see_through_ratio, 0.0, 1e6);
+  visit("see_through_shrink_m", o.see_through_shrink_m, 0.0, 10.0);
   visit("point_extent_lengths", o.point_extent_lengths, 0, 1);
   visit("point_extent_length_quantile", o.point_extent_length_quantile, 0.0, 1.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);

@@ -169,6 +169,9 @@ class ObjectTracker : public ObjectBundleTerms {
   // with fewer boxes is not reported in this frame, and the other one is, its prediction if
   // its own twist failed (object_duplicates.cpp).
   void hide_duplicate_tracks(const Frame& frame);
+  // A canonical track without a box this frame whose box the LiDAR sees through (returns
+  // beyond it on rays crossing it, few inside) is not reported in it (object_free_space.cpp).
+  void hide_see_through_tracks(const Frame& frame);
   // Step 4: stereo keypoints of `instance` not claimed yet -> points of cluster c.
   void add_points(int c, const Frame& frame, int instance);
   // Stereo keypoints of `instance` no cluster claimed, in the world frame.

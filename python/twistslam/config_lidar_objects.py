@@ -117,6 +117,19 @@ class LidarObjectsConfig:
         "the car). A box's centre scatters by 0.1-0.3 m; cars side by side are >= 1.8 m apart "
         "centre to centre, so a 0.3 m margin never joins two cars. Oracle urban s1: a 2-box "
         "duplicate track turned by 170 deg was the car's main track. < 0: never", "m")
+    see_through_min_rays: int = param(
+        10, "a canonical track without a box this frame is not reported when at least this "
+        "many LiDAR returns lie beyond its box on rays crossing it (a car is where its returns "
+        "are; rays pass through where no car is; 0: off): oracle urban s4's ghost, a second "
+        "cluster on a parked car tracking points 3-4 m beyond it for 45 frames. A hidden car "
+        "has rays ending before it: no verdict", "returns", lo=0, hi=1000000)
+    see_through_ratio: float = param(
+        3.0, "... and at least this many times the returns inside the box (a real car's box "
+        "partly off its car still holds many)", "ratio", lo=0.0, hi=1e6)
+    see_through_shrink_m: float = param(
+        0.3, "the box shrinks by this on every side for the crossing test: the rays are cast "
+        "from the camera, ~0.3 m from the LiDAR's origin on KITTI, and a box's own error "
+        "(0.1-0.3 m) must not let rays graze it", "m", lo=0.0, hi=10.0)
     point_extent_lengths: bool = param(
         False, "boxes that are the tight extent of their points (Detections3D.point_extent, "
         "the classical detector) are laid from their end nearer the sensor, the car's length "
