@@ -228,6 +228,7 @@ void ObjectTracker::attach_new_cluster_detections(const Frame& frame, int first_
     if (detection_of[i] >= 0) {
       attach_detection(fresh[i], frame, detection_of[i]);
       register_scan(fresh[i], frame);  // its first object scan
+      backfill_from_boxes(fresh[i]);
     }
 }
 

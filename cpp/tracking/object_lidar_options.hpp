@@ -37,6 +37,12 @@ struct ObjectLidarOptions {
   // a canonical track without a box this frame is not reported when at least see_through_min_rays
   // returns (0: off), and see_through_ratio times those inside, lie beyond its box (shrunk by
   // see_through_shrink_m) on rays crossing it (objects/box_free_space.hpp)
+  // a new canonical track's backcast from the boxes no track took in the frames before it
+  // (objects/box_chain.hpp): at most this many frames (0: off), and the chain's gates (m)
+  int backfill_frames = 10;
+  double backfill_first_gate_m = 3.0;
+  double backfill_gate_m = 1.0;
+  double backfill_ambiguity_m = 1.0;
   int see_through_min_rays = 10;
   double see_through_ratio = 3.0;
   double see_through_shrink_m = 0.3;
@@ -100,6 +106,10 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("refine_min_agreement", o.refine_min_agreement, 0.0, 1.0);
   visit("refine_min_boxes", o.refine_min_boxes, 2, 1000000);
   visit("duplicate_margin_m", o.duplicate_margin_m, -1.0, 10.0);
+  visit("backfill_frames", o.backfill_frames, 0, 1000);
+  visit("backfill_first_gate_m", o.backfill_first_gate_m, 0.0, 100.0);
+  visit("backfill_gate_m", o.backfill_gate_m, 0.0, 100.0);
+  visit("backfill_ambiguity_m", o.backfill_ambiguity_m, 0.0, 100.0);
   visit("see_through_min_rays", o.see_through_min_rays, 0, 1000000);
   visit("see_through_ratio", o.see_through_ratio, 0.0, 1e6);
   visit("see_through_shrink_m", o.see_through_shrink_m, 0.0, 10.0);

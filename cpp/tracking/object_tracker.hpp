@@ -172,6 +172,13 @@ class ObjectTracker : public ObjectBundleTerms {
   // A canonical track without a box this frame whose box the LiDAR sees through (returns
   // beyond it on rays crossing it, few inside) is not reported in it (object_free_space.cpp).
   void hide_see_through_tracks(const Frame& frame);
+  // The frame's boxes no track took, kept for backfill_frames frames (object_backfill.cpp).
+  void remember_unused_boxes(const Frame& frame);
+  // A new canonical track c: the unused boxes of the frames before its first one that line up
+  // with it (objects/box_chain.hpp) become its backcast rows (object_backfill.cpp).
+  void backfill_from_boxes(int c);
+  // Re-places track c's backcast rows by its first rows' motion (after the final smoothing).
+  void place_backcast(int c);
   // Step 4: stereo keypoints of `instance` not claimed yet -> points of cluster c.
   void add_points(int c, const Frame& frame, int instance);
   // Stereo keypoints of `instance` no cluster claimed, in the world frame.
@@ -246,6 +253,17 @@ class ObjectTracker : public ObjectBundleTerms {
   // during track(): mask_lidar_depths' instance -> depths, filled on its first call
   mutable std::map<int, std::vector<double>> mask_lidar_depths_;
   mutable bool mask_lidar_depths_ready_ = false;
+  // the boxes no track took, per recent frame (oldest first), for backfill_from_boxes
+  struct UnusedBox {
+    Mat4 T_w_box = Mat4::Identity();
+    int class_id = 0;
+    double score = 0, range = 0;
+  };
+  struct UnusedBoxes {
+    int frame = -1;
+    std::vector<UnusedBox> boxes;
+  };
+  std::vector<UnusedBoxes> recent_unused_boxes_;
   struct ObjectScan;                            // object_scans.cpp
   std::map<int, std::shared_ptr<const ObjectScan>> last_scan_;  // track id -> its latest scan
   int next_id_ = 0;

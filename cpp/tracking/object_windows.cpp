@@ -267,6 +267,7 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
       ++report.num_rejected;
       continue;
     }
+    place_backcast(c);  // the rows before the first (boxes' backfill) continue the smoothed ones
     track.T_w_o_online = std::move(online);
     ++report.num_tracks;
     report.num_residuals += s.num_residuals;

@@ -117,6 +117,22 @@ class LidarObjectsConfig:
         "the car). A box's centre scatters by 0.1-0.3 m; cars side by side are >= 1.8 m apart "
         "centre to centre, so a 0.3 m margin never joins two cars. Oracle urban s1: a 2-box "
         "duplicate track turned by 170 deg was the car's main track. < 0: never", "m")
+    backfill_frames: int = param(
+        10, "a new canonical track takes, as its rows before its first frame (reported, never "
+        "tracked or smoothed), the boxes no track took in up to this many earlier frames that "
+        "line up with its first box (objects/box_chain.hpp; 0: off): a cluster starts only once "
+        "its mask holds enough stereo points, while the detector may box a far, dark or queued "
+        "car frames earlier (crowded s1's car 17: tracked from frame 38, boxed from 31)",
+        "frames", lo=0, hi=1000)
+    backfill_first_gate_m: float = param(
+        3.0, "the first step back has no velocity: its box within this of the first box (a car "
+        "at 100 km/h moves 2.8 m a frame)", "m", lo=0.0, hi=100.0)
+    backfill_gate_m: float = param(
+        1.0, "later steps: within this of the constant-velocity prediction (oracle boxes "
+        "scatter by 0.1-0.6 m with range)", "m", lo=0.0, hi=100.0)
+    backfill_ambiguity_m: float = param(
+        1.0, "the nearest box must be this much nearer than the next one, or the chain stops "
+        "(two cars side by side are >= 1.8 m apart)", "m", lo=0.0, hi=100.0)
     see_through_min_rays: int = param(
         10, "a canonical track without a box this frame is not reported when at least this "
         "many LiDAR returns lie beyond its box on rays crossing it (a car is where its returns "

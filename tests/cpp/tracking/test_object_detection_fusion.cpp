@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -71,6 +72,7 @@ struct Boxes {
   int class_id = kCar;
   int first_frame = 0;   // boxes from this frame on
   int keypoint_frames = 1000;  // the car's keypoints in frames before this one only
+  int keypoints_from = 0;      // ... and from this one on
   bool lidar = false;          // the frame's scan of the car goes to the tracker
   double centre_noise_m = 0;   // per-frame box noise: centre (each axis of the road plane)
   double yaw_noise_rad = 0;    // ... and heading
@@ -97,7 +99,7 @@ void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Back
   for (int i = 0; i < frames; ++i) {
     SceneFrame f(i);
     if (i < boxes.biased_stereo_frames) f.stereo_depth_scale = boxes.stereo_depth_scale;
-    if (i < boxes.keypoint_frames) f.add_car(car, i, instance_id(i));
+    if (i < boxes.keypoint_frames && i >= boxes.keypoints_from) f.add_car(car, i, instance_id(i));
     f.add_background(background);
     std::vector<objects::Detection> dets;
     if (i >= boxes.first_frame) {
@@ -301,6 +303,47 @@ TEST_F(DetectionFusion, PointExtentBoxesDoNotVoteOnTheHeading) {
   ASSERT_EQ(tracker.tracks().size(), 1u);
   const Vec3 x_axis = tracker.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
   EXPECT_GT(x_axis.dot(car.pose(7).block<3, 1>(0, 0)), 0.99);
+}
+
+TEST_F(DetectionFusion, BoxesBeforeTheClusterStartsBecomeItsFirstRows) {
+  // the detector boxes the car from frame 0, its keypoints appear at frame 4 (a far or dark
+  // car's mask held too few stereo points): frames 0-3 are placed by its earlier boxes
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0.1), 0.0);
+  Boxes boxes;
+  boxes.keypoints_from = 4;
+  boxes.centre_noise_m = 0.05;
+  auto tracker = track_one_car(car, boxes, 10);
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  auto expect_on_the_car = [&](const objects::ObjectTrack& track) {
+    EXPECT_EQ(track.first_frame(), 4);
+    ASSERT_EQ(track.backcast.size(), 4u);
+    for (int k = 0; k < 4; ++k) {
+      const objects::TrackFrame& row = track.backcast[k];
+      EXPECT_EQ(row.frame, k);
+      EXPECT_TRUE(row.reported);
+      EXPECT_LT((row.T_w_o.topRightCorner<3, 1>() - car.pose(k).topRightCorner<3, 1>()).norm(), 0.25);
+      const Vec3 x_axis = row.T_w_o.block<3, 1>(0, 0);
+      EXPECT_GT(x_axis.dot(car.pose(k).block<3, 1>(0, 0)), 0.99);
+    }
+  };
+  expect_on_the_car(tracker.tracks()[0]);
+  // after the final smoothing the rows continue the smoothed track's first motion
+  std::map<int, Mat4> cameras;
+  for (int i = 0; i < 10; ++i) cameras[i] = Mat4::Identity();
+  ASSERT_EQ(tracker.smooth_tracks(cameras).num_tracks, 1);
+  const objects::ObjectTrack& track = tracker.tracks()[0];
+  expect_on_the_car(track);
+  const Vec3 step = track.frames.front().T_w_o.topRightCorner<3, 1>() -
+                    track.backcast.back().T_w_o.topRightCorner<3, 1>();
+  EXPECT_NEAR(step.norm(), car.velocity.norm(), 0.05);
+  // off: no rows before the cluster's first frame
+  tracking::ObjectLidarOptions lidar;
+  lidar.backfill_frames = 0;
+  auto off = make_tracker({}, lidar);
+  std::vector<tracking::ObjectTrackingReport> reports;
+  run_with_boxes(off, car, background, 10, boxes, rng, &reports);
+  ASSERT_EQ(off.tracks().size(), 1u);
+  EXPECT_TRUE(off.tracks()[0].backcast.empty());
 }
 
 TEST_F(DetectionFusion, QuarterTurnedPriorLengthBoxesPlaceNothing) {
