@@ -37,7 +37,10 @@ class TrackedObject:
         (``objects.range_score_*``): the score of its result rows, what ``min_track_score``
         compares.
     range : (K,) distance of the associated detection from the camera, m (0 where none).
-    backcast : number of leading rows predicted before the first detection (backcast).
+    backcast : number of leading rows before the track's first frame: the detections
+        tracker's predictions before its first detection; for visual object tracking, the
+        frames before its cluster started where unused boxes followed it back
+        (``lidar_objects.backfill_frames``), placed along its first motion.
     canonical : the object frame is a 3D box's frame (origin at the box centre, x along the
         length): always for the detections tracker; for visual object tracking once a 3D
         detection was associated (before that the box is fitted to the cluster's points).
