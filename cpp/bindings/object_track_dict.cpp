@@ -16,10 +16,11 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
   for (const auto& f : t.frames) rows.push_back(&f);
   const auto K = static_cast<py::ssize_t>(rows.size());
   DoubleArray poses = new_array({K, 4, 4}), detected_poses = new_array({K, 4, 4});
-  // the poses before the final smoothing (the backcast rows were never smoothed)
+  // the poses before the final smoothing (a backcast row re-placed by it: its own online pose)
   DoubleArray online_poses = new_array({K, 4, 4});
   const bool smoothed = t.T_w_o_online.size() == t.frames.size() && !t.frames.empty();
   const auto B = static_cast<py::ssize_t>(t.backcast.size());
+  const bool backcast_replaced = static_cast<py::ssize_t>(t.backcast_online.size()) == B;
   DoubleArray twists = new_array({K, 6}), scores = new_array({K}), sizes = new_array({K, 3});
   DoubleArray ranges = new_array({K}), confidences = new_array({K});
   py::array_t<std::int64_t> frames(K), det_index(K);
@@ -31,7 +32,9 @@ py::dict track_to_dict(const o::ObjectTrack& t) {
         poses.mutable_data()[k * 16 + r * 4 + c] = f.T_w_o(r, c);
         detected_poses.mutable_data()[k * 16 + r * 4 + c] = f.T_w_o_detected(r, c);
         online_poses.mutable_data()[k * 16 + r * 4 + c] =
-            smoothed && k >= B ? t.T_w_o_online[k - B](r, c) : f.T_w_o(r, c);
+            smoothed && k >= B                ? t.T_w_o_online[k - B](r, c)
+            : smoothed && backcast_replaced ? t.backcast_online[k](r, c)
+                                              : f.T_w_o(r, c);
       }
     for (int i = 0; i < 6; ++i) twists.mutable_data()[k * 6 + i] = f.xi[i];
     for (int i = 0; i < 3; ++i) sizes.mutable_data()[k * 3 + i] = f.detected_size[i];

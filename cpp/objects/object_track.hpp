@@ -86,6 +86,8 @@ struct ObjectTrack {
   // per row, the pose the online tracking gave it before the final smoothing replaced T_w_o
   // (empty: not smoothed)
   std::vector<Mat4> T_w_o_online;
+  // the same for the backcast rows the final smoothing re-placed (empty: not re-placed)
+  std::vector<Mat4> backcast_online;
 
   bool alive() const { return state != TrackState::kDead; }
   bool ever_confirmed() const { return confirmed_frame >= 0; }

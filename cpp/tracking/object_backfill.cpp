@@ -119,6 +119,8 @@ void ObjectTracker::place_backcast(int c) {
     const int steps = std::min(kBackcastSteps, static_cast<int>(track.frames.size()) - 1);
     velocity = (track.frames[steps].T_w_o.topRightCorner<3, 1>() - p_first) / static_cast<double>(steps);
   }
+  track.backcast_online.clear();
+  for (const objects::TrackFrame& row : track.backcast) track.backcast_online.push_back(row.T_w_o);
   for (objects::TrackFrame& row : track.backcast) {
     row.T_w_o = T_first;
     row.T_w_o.topRightCorner<3, 1>() -= static_cast<double>(first - row.frame) * velocity;
