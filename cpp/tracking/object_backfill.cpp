@@ -10,6 +10,32 @@
 #include "tracking/object_tracker.hpp"
 
 namespace twistslam::tracking {
+namespace {
+
+// Velocity (m per frame, forward in time) of a line through the track's first row and the
+// boxes of its backcast rows (T_w_o_detected), by least squares: their scatter averages out.
+Vec3 velocity_through_boxes(const objects::ObjectTrack& track) {
+  const Vec3 p_first = track.frames.front().T_w_o.topRightCorner<3, 1>();
+  Vec3 sum = Vec3::Zero();
+  double sum_sq = 0;
+  for (const objects::TrackFrame& row : track.backcast) {
+    const double back = static_cast<double>(track.first_frame() - row.frame);
+    sum += back * (p_first - row.T_w_o_detected.topRightCorner<3, 1>());
+    sum_sq += back * back;
+  }
+  return sum / sum_sq;
+}
+
+// The backcast rows continue the first row backwards at this velocity, at its rotation.
+void continue_backwards(objects::ObjectTrack& track, const Vec3& velocity) {
+  const Mat4& T_first = track.frames.front().T_w_o;
+  for (objects::TrackFrame& row : track.backcast) {
+    row.T_w_o = T_first;
+    row.T_w_o.topRightCorner<3, 1>() -= static_cast<double>(track.first_frame() - row.frame) * velocity;
+  }
+}
+
+}  // namespace
 
 void ObjectTracker::remember_unused_boxes(const Frame& frame) {
   if (lidar_options_.backfill_frames <= 0) {
@@ -62,31 +88,19 @@ void ObjectTracker::backfill_from_boxes(int c) {
   if (chain.empty()) return;
   // The rows follow the boxes' mean motion, not each box: a box's own scatter (the oracle's
   // ~2 deg and 0.1-0.6 m) in every row raised the RPE of the tracks it was given (crowded s1
-  // det-reg RPE_r 0.127 -> 0.408 deg/m with raw boxes). A constant velocity through the
-  // first row (least squares over the chain's centres), and the first row's rotation: a car
-  // hardly turns in backfill_frames frames.
-  const Mat4& T_first = track.frames.front().T_w_o;
-  const Vec3 p_first = T_first.topRightCorner<3, 1>();
-  Vec3 sum = Vec3::Zero();
-  double sum_sq = 0;
-  for (size_t s = 0; s < chain.size(); ++s) {
-    const double back = static_cast<double>(s + 1);  // frames before the first
-    sum += back * (p_first - boxes[s][chain[s]]->T_w_box.topRightCorner<3, 1>());
-    sum_sq += back * back;
-  }
-  const Vec3 velocity = sum / sum_sq;  // m per frame, forward in time
+  // det-reg RPE_r 0.127 -> 0.408 deg/m with raw boxes). A car hardly turns in
+  // backfill_frames frames: the first row's rotation.
   for (int s = static_cast<int>(chain.size()) - 1; s >= 0; --s) {  // oldest first
     const UnusedBox& b = *boxes[s][chain[s]];
     objects::TrackFrame row;
     row.frame = first - 1 - s;
-    row.T_w_o = T_first;
-    row.T_w_o.topRightCorner<3, 1>() = p_first - static_cast<double>(s + 1) * velocity;
     row.T_w_o_detected = b.T_w_box;  // kept for place_backcast (detection_index stays -1)
     row.reported = true;
     row.score = row.confidence = b.score;
     row.range = b.range;
     track.backcast.push_back(row);
   }
+  continue_backwards(track, velocity_through_boxes(track));
 }
 
 void ObjectTracker::place_backcast(int c) {
@@ -102,29 +116,17 @@ void ObjectTracker::place_backcast(int c) {
   // raised urban s0's far oncoming cars' ATE 0.045 -> 0.156 m).
   constexpr int kMinBackcastBoxes = 3;
   constexpr int kBackcastSteps = 4;
-  const Mat4& T_first = track.frames.front().T_w_o;
-  const Vec3 p_first = T_first.topRightCorner<3, 1>();
-  const int first = track.first_frame();
   Vec3 velocity = Vec3::Zero();
   if (static_cast<int>(track.backcast.size()) >= kMinBackcastBoxes) {
-    Vec3 sum = Vec3::Zero();
-    double sum_sq = 0;
-    for (const objects::TrackFrame& row : track.backcast) {
-      const double back = static_cast<double>(first - row.frame);
-      sum += back * (p_first - row.T_w_o_detected.topRightCorner<3, 1>());
-      sum_sq += back * back;
-    }
-    velocity = sum / sum_sq;
+    velocity = velocity_through_boxes(track);
   } else {
     const int steps = std::min(kBackcastSteps, static_cast<int>(track.frames.size()) - 1);
-    velocity = (track.frames[steps].T_w_o.topRightCorner<3, 1>() - p_first) / static_cast<double>(steps);
+    velocity = (track.frames[steps].T_w_o.topRightCorner<3, 1>() - track.frames.front().T_w_o.topRightCorner<3, 1>()) /
+               static_cast<double>(steps);
   }
   track.backcast_online.clear();
   for (const objects::TrackFrame& row : track.backcast) track.backcast_online.push_back(row.T_w_o);
-  for (objects::TrackFrame& row : track.backcast) {
-    row.T_w_o = T_first;
-    row.T_w_o.topRightCorner<3, 1>() -= static_cast<double>(first - row.frame) * velocity;
-  }
+  continue_backwards(track, velocity);
 }
 
 }  // namespace twistslam::tracking
