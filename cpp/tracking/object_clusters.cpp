@@ -1,9 +1,10 @@
 // The life cycle of an object cluster (paper sec. "Clusters creation"): new clusters from
-// instance masks (at the ground-contact depth where stereo fails), points joining and being
-// culled or retired, re-seeding after a failure, the travel direction, and re-centring of the
-// object frame. Search and twist estimation are in object_tracker.cpp, the windows (sliding and
+// instance masks (at the ground-contact depth or the nearest stereo depth where stereo fails),
+// points joining and being culled or retired, re-seeding after a failure, the travel
+// direction, and re-centring of the object frame. Search and twist estimation are in object_tracker.cpp, the windows (sliding and
 // final smoothing) in object_windows.cpp.
 #include <algorithm>
+#include <cmath>
 #include <iterator>
 
 #include "geometry/link_projection.hpp"
@@ -11,6 +12,7 @@
 #include "tracking/ground_contact.hpp"
 #include "tracking/object_point_helpers.hpp"
 #include "tracking/object_tracker.hpp"
+#include "tracking/stereo_depth_fill.hpp"
 
 namespace twistslam::tracking {
 
@@ -57,6 +59,29 @@ std::vector<std::pair<int, Vec3>> ObjectTracker::ground_contact_points(const Fra
   return out;
 }
 
+std::vector<std::pair<int, Vec3>> ObjectTracker::depth_fill_points(
+    const Frame& frame, int instance, const std::vector<std::pair<int, Vec3>>& stereo) const {
+  const map::StereoKeypoints& k = frame.keypoints;
+  std::vector<Vec2> stereo_uv, mono_uv;
+  std::vector<double> stereo_depth;
+  for (const auto& s : stereo) stereo_uv.push_back(k.uv[s.first]), stereo_depth.push_back(k.depth[s.first]);
+  std::vector<int> mono;
+  for (int i = 0; i < static_cast<int>(k.size()); ++i)
+    if (instance_of_keypoint_[i] == instance && claimed_by_[i] < 0 && !k.has_depth(i))
+      mono.push_back(i), mono_uv.push_back(k.uv[i]);
+  const std::vector<double> depth = nearest_stereo_depths(
+      stereo_uv, stereo_depth, mono_uv,
+      {options_.depth_fill_min_points, options_.depth_fill_max_depth_m,
+       options_.depth_fill_min_stereo_share});
+  std::vector<std::pair<int, Vec3>> out;
+  if (depth.empty()) return out;
+  const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
+  for (size_t m = 0; m < mono.size(); ++m)
+    if (std::isfinite(depth[m]))
+      out.emplace_back(mono[m], transform(T_w_c, camera_.backproject(k.uv[mono[m]], depth[m])));
+  return out;
+}
+
 bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points,
                                 bool ground_contact, std::vector<std::pair<int, Vec3>>* kept,
                                 Vec3* centroid) const {
@@ -76,10 +101,16 @@ bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points
                                [&](const std::pair<int, Vec3>& f) { return mask_depth > ratio * k.depth[f.first]; }),
                 fresh.end());
   }
+  const size_t num_stereo = fresh.size();
   if (static_cast<int>(fresh.size()) < min_points && ground_contact && options_.ground_contact &&
       !labels_.empty() && road_plane_w_.head<3>().norm() > 0) {
     const auto mono = ground_contact_points(frame, instance);
     // the stereo points keep their depth: they place the car where they can
+    fresh.insert(fresh.end(), mono.begin(), mono.end());
+  }
+  if (ground_contact && fresh.size() == num_stereo &&
+      static_cast<int>(num_stereo) < depth_fill_below_points_) {
+    const auto mono = depth_fill_points(frame, instance, fresh);
     fresh.insert(fresh.end(), mono.begin(), mono.end());
   }
   if (static_cast<int>(fresh.size()) < min_points) return false;

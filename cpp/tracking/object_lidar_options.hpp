@@ -83,12 +83,16 @@ struct ObjectLidarOptions {
   // in a frame with 3D boxes, ObjectTrackingOptions::instance_border_px is this instead (a box
   // places its car, and a far car's corners along nearer cars are what it has left)
   double instance_border_px = 0.0;
+  // ... and ObjectTrackingOptions::depth_fill_below_points this (0: a box places its car; the
+  // filled depths of far cars' masks seeded canonical ghosts)
+  int depth_fill_below_points = 0;
 };
 
 template <typename Visit>
 void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("use_detections", o.use_detections, 0, 1);
   visit("instance_border_px", o.instance_border_px, 0.0, 50.0);
+  visit("depth_fill_below_points", o.depth_fill_below_points, 0, 100000);
   visit("detection_max_distance_m", o.detection_max_distance_m, 0.0, 1000.0);
   visit("box_instance_min_returns", o.box_instance_min_returns, 0, 1000000);
   visit("box_instance_max_distance_m", o.box_instance_max_distance_m, 0.0, 1000.0);

@@ -313,9 +313,10 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   const size_t n = frame.keypoints.size();
   instance_of_keypoint_.assign(n, 0);
   // with 3D boxes a box places its car: the border rule is the LiDAR fusion's own
-  const double border_px = lidar_options_.use_detections && !detections.empty()
-                               ? lidar_options_.instance_border_px
-                               : options_.instance_border_px;
+  const bool boxed = lidar_options_.use_detections && !detections.empty();
+  const double border_px = boxed ? lidar_options_.instance_border_px : options_.instance_border_px;
+  depth_fill_below_points_ =
+      boxed ? lidar_options_.depth_fill_below_points : options_.depth_fill_below_points;
   if (!instances.empty())
     for (size_t i = 0; i < n; ++i) {
       const double scale = level_scale(i < frame.keypoints.octave.size() ? frame.keypoints.octave[i] : 0);

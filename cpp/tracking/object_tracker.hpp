@@ -186,7 +186,8 @@ class ObjectTracker : public ObjectBundleTerms {
   // The free stereo points of `instance` within max_point_spread_m of their median, and
   // their centroid (world frame); false with fewer than min_points. With ground_contact
   // (vehicles) and too few stereo points, the instance's keypoints without depth are placed
-  // at its ground-contact depth instead (ground_contact.hpp).
+  // at its ground-contact depth instead (ground_contact.hpp); with fewer than
+  // depth_fill_below_points and no contact, at their nearest stereo point's depth.
   // With a LiDAR scan, stereo points more than mask_max_depth_ratio nearer than the median of
   // the mask's returns are left out (in front of the surface the LiDAR sees: wrong matches).
   bool seed_points(const Frame& frame, int instance, int min_points, bool ground_contact,
@@ -194,6 +195,11 @@ class ObjectTracker : public ObjectBundleTerms {
   // The free keypoints of `instance` without a stereo depth, at its ground-contact depth
   // (world frame); empty when the mask shows no contact with the road.
   std::vector<std::pair<int, Vec3>> ground_contact_points(const Frame& frame, int instance) const;
+  // The free keypoints of `instance` without a stereo depth, each at the depth of the nearest
+  // of `stereo` (the instance's stereo points) in the image (stereo_depth_fill.hpp); empty
+  // when those are too few or too far.
+  std::vector<std::pair<int, Vec3>> depth_fill_points(const Frame& frame, int instance,
+                                                      const std::vector<std::pair<int, Vec3>>& stereo) const;
   // Stereo points a new (or re-seeded) cluster of this link needs: the planar link's
   // 3-DoF twist is fixed by fewer points than a free 6-DoF one.
   int min_seed_points(geometry::LinkType link) const;
@@ -268,6 +274,8 @@ class ObjectTracker : public ObjectBundleTerms {
   std::map<int, std::shared_ptr<const ObjectScan>> last_scan_;  // track id -> its latest scan
   int next_id_ = 0;
   int last_frame_ = -1;
+  // the current frame's depth_fill_below_points (the LiDAR fusion's own in a frame with boxes)
+  int depth_fill_below_points_ = 0;
   // per keypoint of the current frame
   std::vector<int> instance_of_keypoint_;
   std::vector<int> claimed_by_;  // cluster index or -1

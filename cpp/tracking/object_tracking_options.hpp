@@ -35,6 +35,13 @@ struct ObjectTrackingOptions {
   bool ground_contact = true;
   int min_contact_columns = 5;      // mask columns with road right below their lowest pixel
   double min_contact_fraction = 0.5; // ... and this fraction of the mask's columns
+  // a vehicle instance with fewer stereo points than this (but at least depth_fill_min_points,
+  // their median within depth_fill_max_depth_m) starts with its keypoints without stereo too,
+  // each at the depth of its nearest stereo keypoint (tracking/stereo_depth_fill.hpp; 0: off)
+  int depth_fill_below_points = 12;
+  int depth_fill_min_points = 3;
+  double depth_fill_max_depth_m = 30;
+  double depth_fill_min_stereo_share = 0.15;  // of the mask's free keypoints
   // a keypoint this close (level-0 px, times its level's scale) to another instance's pixel
   // belongs to neither: its corner and stereo depth may be the occluder's (0: off)
   double instance_border_px = 3;
@@ -108,6 +115,10 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("instance_border_px", o.instance_border_px, 0.0, 50.0);
   visit("min_contact_columns", o.min_contact_columns, 1, 100000);
   visit("min_contact_fraction", o.min_contact_fraction, 0.0, 1.0);
+  visit("depth_fill_below_points", o.depth_fill_below_points, 0, 100000);
+  visit("depth_fill_min_points", o.depth_fill_min_points, 1, 100000);
+  visit("depth_fill_max_depth_m", o.depth_fill_max_depth_m, 0.5, 10000.0);
+  visit("depth_fill_min_stereo_share", o.depth_fill_min_stereo_share, 0.0, 1.0);
   visit("min_shared_points", o.min_shared_points, 1, 100000);
   visit("min_mask_overlap", o.min_mask_overlap, 0.0, 1.0);
   visit("min_inliers", o.min_inliers, 3, 100000);  // 3 points fix a rigid motion

@@ -274,6 +274,71 @@ TEST_F(TrackerScene, RoadInstanceNeverStartsACluster) {
   }
 }
 
+TEST_F(TrackerScene, CarWithFewStereoDepthsStartsWithItsOtherKeypointsAtTheNearestOnesDepth) {
+  // a car 16 m ahead driving away at 0.3 m/frame: 5 of its keypoints have a stereo depth (fewer
+  // than the 6 a vehicle cluster needs), 25 have none (the right camera sees past an occluder).
+  // No class image, so no ground contact: the stereo points are all it has.
+  const Vec3 c0(1.0, 0.9, 16), v(0, 0, 0.3);
+  const Car stereo_part = make_car(rng, c0, v, 0.0, 5);
+  const Car mono_part = make_car(rng, c0, v, 0.0, 25);
+  auto run = [&](const tracking::ObjectTrackingOptions& options, const Vec3& start,
+                 const std::vector<objects::Detection>& boxes = {},
+                 const tracking::ObjectLidarOptions& lidar = {}) {
+    Car s = stereo_part, m = mono_part;
+    s.c0 = m.c0 = start;
+    auto tracker = make_tracker(options, lidar);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    for (int i = 0; i < 8; ++i) {
+      SceneFrame f(i);
+      f.add_car(s, i, instance_id(i));
+      f.mono = true;
+      f.add_car(m, i, instance_id(i));
+      f.mono = false;
+      f.add_background(background);
+      reports.push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
+                                      cv::Mat(), Vec4::Zero(), boxes));
+    }
+    return std::make_pair(std::move(tracker), reports);
+  };
+  const tracking::ObjectTrackingOptions options;
+  ASSERT_GT(options.depth_fill_below_points, 5);
+  ASSERT_GT(options.min_new_planar_cluster_points, 5);
+  auto [filled, reports] = run(options, c0);
+  ASSERT_EQ(filled.tracks().size(), 1u);
+  EXPECT_EQ(reports[0].num_new, 1);
+  // the mono keypoints joined (later frames add stereo points only, of which there are 5);
+  // a few are culled as the car recedes
+  EXPECT_GE(filled.clusters()[0].points.size(), 20u);
+  for (int i = 1; i < 8; ++i) EXPECT_EQ(reports[i].num_tracked, 1) << "frame " << i;
+  const objects::ObjectTrack& track = filled.tracks()[0];
+  // the points' centroid: the car's centre, within its depth extent (+-0.9 m) in z
+  const Vec3 origin = track.frames[0].T_w_o.topRightCorner<3, 1>();
+  EXPECT_NEAR(origin.z(), c0.z(), 0.9);
+  EXPECT_NEAR(origin.x(), c0.x(), 0.3);
+  const Vec3 moved = track.frames.back().T_w_o.topRightCorner<3, 1>() - origin;
+  EXPECT_NEAR(moved.z(), 0.3 * 7, 0.3);
+  EXPECT_NEAR(moved.x(), 0.0, 0.15);
+
+  // off: 5 stereo points start nothing
+  tracking::ObjectTrackingOptions off = options;
+  off.depth_fill_below_points = 0;
+  EXPECT_TRUE(run(off, c0).first.tracks().empty());
+  // the same car 40 m away: its few disparities are too uncertain to place the others
+  EXPECT_TRUE(run(options, Vec3(1.0, 0.9, 40)).first.tracks().empty());
+  // in frames with 3D boxes (here one on a car far to the left), a box places its car: the
+  // LiDAR fusion's own threshold applies, 0 by default
+  objects::Detection far_box;
+  far_box.box.center = Vec3(-12, 0.9, 30);
+  far_box.box.length = 4.0, far_box.box.width = 1.6, far_box.box.height = 1.5;
+  far_box.score = 1.0;
+  far_box.class_id = kCar;
+  tracking::ObjectLidarOptions lidar;
+  ASSERT_EQ(lidar.depth_fill_below_points, 0);
+  EXPECT_TRUE(run(options, c0, {far_box}).first.tracks().empty());
+  lidar.depth_fill_below_points = options.depth_fill_below_points;
+  EXPECT_EQ(run(options, c0, {far_box}, lidar).first.tracks().size(), 1u);
+}
+
 TEST_F(TrackerScene, PlanarClassStartsAClusterFromFewerPointsThanAFreeOne) {
   // 8 stereo points under one instance: between the planar minimum (6) and the free one (10)
   constexpr int kPerson = 24;  // an object class outside planar_class_ids: free link
@@ -324,11 +389,12 @@ TEST_F(TrackerScene, BadInstanceOrFlowImagesThrow) {
 }  // namespace
 namespace {
 
-// Known limitations (see the helper report), disabled so the suite stays green; run with
-// --gtest_also_run_disabled_tests. Without flow, a car moving 0.5 m/frame at 15 m (~24 px)
-// is outside the 12 px projection window in the frame after its birth (zero velocity yet):
-// no match, the twist is invalid, and the mask-overlap association then adds the instance's
-// keypoints to the cluster at the stale predicted pose, duplicating every point 0.5 m off.
+// Two former limitations, fixed and kept as tests. Without flow, a car moving 0.5 m/frame at
+// 15 m (~24 px) was outside the 12 px projection window in the frame after its birth (zero
+// velocity yet): no match, an invalid twist, and the mask-overlap association then added the
+// instance's keypoints at the stale predicted pose, duplicating every point 0.5 m off. A
+// cluster without a velocity is now searched in a 3x wider window, and a missed frame adds no
+// points.
 TEST_F(TrackerScene, FastCarWithoutFlowIsTrackedAfterBirth) {
   const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0), 0.02);
   auto tracker = make_tracker();
