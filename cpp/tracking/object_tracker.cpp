@@ -242,7 +242,13 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     track.state = track.misses > options_.max_misses ? objects::TrackState::kDead
                                                       : objects::TrackState::kLost;
   }
-  row.reported = valid || reseeded || box_kept;
+  // a cluster never tracked since its birth, re-seeded: the row is one frame's stereo points,
+  // reported only where their depth is good to a car's half length
+  const bool never_tracked = track.hits < 2;
+  const bool reseed_reported =
+      reseeded && (!never_tracked || (frame.T_c_w * row.T_w_o)(2, 3) <=
+                                         options_.untracked_report_max_depth_m);
+  row.reported = valid || reseed_reported || box_kept;
   track.frames.push_back(row);
   if (detection >= 0) attach_detection(c, frame, detection);
   if (reseeded) return false;  // fresh points: no statistics, window or new points this frame

@@ -51,6 +51,8 @@ struct ObjectTrackingOptions {
   double max_step_m = 5.0;          // object motion per frame beyond this is no motion (a fit gone wrong)
   int max_misses = 5;               // frames without a valid twist before the track ends
   int reseed_after_misses = 1;      // failed frames before new points replace a cluster's (0: never)
+  // a cluster never tracked since its birth reports its re-seeded rows only this near (m)
+  double untracked_report_max_depth_m = 45;
   double max_point_spread_m = 4.0;  // new points farther from the cluster median are dropped
   double max_depth_m = 60;          // stereo points farther than this never join a cluster
   int max_points = 600;             // per cluster; the least often found are dropped first
@@ -125,6 +127,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("max_step_m", o.max_step_m, 0.01, 1000.0);
   visit("max_misses", o.max_misses, 0, 100000);
   visit("reseed_after_misses", o.reseed_after_misses, 0, 100000);
+  visit("untracked_report_max_depth_m", o.untracked_report_max_depth_m, 0.0, 10000.0);
   visit("max_point_spread_m", o.max_point_spread_m, 0.1, 1000.0);
   visit("max_depth_m", o.max_depth_m, 0.5, 10000.0);
   visit("max_points", o.max_points, 3, 1000000);

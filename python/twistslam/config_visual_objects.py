@@ -140,6 +140,15 @@ class VisualObjectsConfig:
         1, "failed frames after which a cluster whose instance is still associated takes "
         "that instance's stereo points as its new points (same track); 0: never (the track "
         "fails until it dies and the instance starts a new one)", "frames")
+    untracked_report_max_depth_m: float = param(
+        45.0, "a cluster never tracked since its birth (no valid twist) reports a re-seeded row "
+        "only when its origin is this near (camera z): such a row is one frame's stereo "
+        "points, and beyond ~45 m their depth error at 0.5 px (2.6 m) passes a car's half "
+        "length. Far oncoming cars' clusters that re-seeded frame after frame 3-4 m off were "
+        "ghosts (urban s2 at 56 m). Ten simulated sequences, camera alone: ghosts 4 -> 3 "
+        "(files), 5 -> 4 (DIS), the same 46 of 49 cars; reporting no such row at all (any "
+        "range) gave 2 ghosts but lost urban s2's cars 0 and 9 at 37-43 m (44 cars)", "m",
+        lo=0.0)
     max_point_spread_m: float = param(
         4.0, "new points farther than this from the cluster's median point are dropped "
         "(a car is <= 5.2 m long; masks bleed onto the background)", "m")

@@ -339,6 +339,43 @@ TEST_F(TrackerScene, CarWithFewStereoDepthsStartsWithItsOtherKeypointsAtTheNeare
   EXPECT_EQ(run(options, c0, {far_box}, lidar).first.tracks().size(), 1u);
 }
 
+TEST_F(TrackerScene, AClusterNeverTrackedReportsItsReseededRowsOnlyWhenNear) {
+  // a parked car whose keypoints change descriptors every frame: no point is ever found
+  // again, so each frame re-seeds the cluster from its instance's stereo points (rows placed
+  // by one frame's stereo alone, the cluster never tracked)
+  auto run = [&](double depth, const tracking::ObjectTrackingOptions& options) {
+    Car car = make_car(rng, Vec3(1.0, 0.9, depth), Vec3::Zero(), 0.0, 40);
+    auto tracker = make_tracker(options);
+    for (int i = 0; i < 6; ++i) {
+      for (auto& d : car.descriptors) d = test_scenes::random_descriptor(rng);
+      SceneFrame f(i);
+      f.add_car(car, i, instance_id(i));
+      f.add_background(background);
+      tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+    }
+    return tracker;
+  };
+  const tracking::ObjectTrackingOptions options;
+  ASSERT_GT(options.untracked_report_max_depth_m, 30.0);
+  ASSERT_LT(options.untracked_report_max_depth_m, 50.0);
+  auto count_reported = [](const objects::ObjectTrack& t) {
+    return std::count_if(t.frames.begin(), t.frames.end(), [](const auto& r) { return r.reported; });
+  };
+  for (double depth : {30.0, 50.0}) {
+    const auto tracker = run(depth, options);
+    ASSERT_EQ(tracker.tracks().size(), 1u) << depth << " m";
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    ASSERT_EQ(track.frames.size(), 6u);
+    EXPECT_EQ(track.hits, 1);  // never tracked
+    for (size_t r = 1; r < track.frames.size(); ++r) EXPECT_FALSE(track.frames[r].detected);
+    // near: every re-seeded row reported; far: only the birth row
+    EXPECT_EQ(count_reported(track), depth < 45 ? 6 : 1) << depth << " m";
+  }
+  tracking::ObjectTrackingOptions any_range = options;
+  any_range.untracked_report_max_depth_m = 100;
+  EXPECT_EQ(count_reported(run(50.0, any_range).tracks()[0]), 6);
+}
+
 TEST_F(TrackerScene, PlanarClassStartsAClusterFromFewerPointsThanAFreeOne) {
   // 8 stereo points under one instance: between the planar minimum (6) and the free one (10)
   constexpr int kPerson = 24;  // an object class outside planar_class_ids: free link
