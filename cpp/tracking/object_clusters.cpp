@@ -1,8 +1,8 @@
 // The life cycle of an object cluster (paper sec. "Clusters creation"): new clusters from
 // instance masks (at the ground-contact depth or the nearest stereo depth where stereo fails),
 // points joining and being culled or retired, re-seeding after a failure, the travel
-// direction, and re-centring of the object frame. Search and twist estimation are in object_tracker.cpp, the windows (sliding and
-// final smoothing) in object_windows.cpp.
+// direction, and re-centring of the object frame. Search and twist estimation are in
+// object_tracker.cpp, the windows (sliding and final smoothing) in object_windows.cpp.
 #include <algorithm>
 #include <cmath>
 #include <iterator>
@@ -52,10 +52,16 @@ std::vector<std::pair<int, Vec3>> ObjectTracker::ground_contact_points(const Fra
                            options_.min_contact_fraction, options_.max_depth_m);
   if (!contact.valid) return out;
   const map::StereoKeypoints& k = frame.keypoints;
-  for (int i = 0; i < static_cast<int>(k.size()); ++i) {
-    if (instance_of_keypoint_[i] != instance || claimed_by_[i] >= 0 || k.has_depth(i)) continue;
+  for (int i : free_mono_keypoints(frame, instance))
     out.emplace_back(i, transform(T_w_c, camera_.backproject(k.uv[i], contact.depth)));
-  }
+  return out;
+}
+
+std::vector<int> ObjectTracker::free_mono_keypoints(const Frame& frame, int instance) const {
+  std::vector<int> out;
+  const map::StereoKeypoints& k = frame.keypoints;
+  for (int i = 0; i < static_cast<int>(k.size()); ++i)
+    if (instance_of_keypoint_[i] == instance && claimed_by_[i] < 0 && !k.has_depth(i)) out.push_back(i);
   return out;
 }
 
@@ -65,10 +71,8 @@ std::vector<std::pair<int, Vec3>> ObjectTracker::depth_fill_points(
   std::vector<Vec2> stereo_uv, mono_uv;
   std::vector<double> stereo_depth;
   for (const auto& s : stereo) stereo_uv.push_back(k.uv[s.first]), stereo_depth.push_back(k.depth[s.first]);
-  std::vector<int> mono;
-  for (int i = 0; i < static_cast<int>(k.size()); ++i)
-    if (instance_of_keypoint_[i] == instance && claimed_by_[i] < 0 && !k.has_depth(i))
-      mono.push_back(i), mono_uv.push_back(k.uv[i]);
+  const std::vector<int> mono = free_mono_keypoints(frame, instance);
+  for (int i : mono) mono_uv.push_back(k.uv[i]);
   const std::vector<double> depth = nearest_stereo_depths(
       stereo_uv, stereo_depth, mono_uv,
       {options_.depth_fill_min_points, options_.depth_fill_max_depth_m,

@@ -195,6 +195,8 @@ class ObjectTracker : public ObjectBundleTerms {
   // The free keypoints of `instance` without a stereo depth, at its ground-contact depth
   // (world frame); empty when the mask shows no contact with the road.
   std::vector<std::pair<int, Vec3>> ground_contact_points(const Frame& frame, int instance) const;
+  // Indices of the keypoints of `instance` without a stereo depth that no cluster claimed.
+  std::vector<int> free_mono_keypoints(const Frame& frame, int instance) const;
   // The free keypoints of `instance` without a stereo depth, each at the depth of the nearest
   // of `stereo` (the instance's stereo points) in the image (stereo_depth_fill.hpp); empty
   // when those are too few or too far.
