@@ -71,6 +71,13 @@ py::dict to_dict(const t::TrackResult& r) {
                   "num_object_points"_a = r.objects.num_points);
 }
 
+// A local BA still solving in its thread (local_ba.asynchronous) is applied before the
+// state is read, without the GIL: the read-ahead thread of twistslam.run goes on meanwhile.
+void finish_ba(t::System& s) {
+  py::gil_scoped_release release;
+  s.finish_local_ba();
+}
+
 }  // namespace
 
 void bind_slam(py::module_& m) {
@@ -178,7 +185,7 @@ dict
     depth), timings_ms {stage: ms}, num_objects_tracked, num_objects_new,
     num_object_points (matched inlier points of all clusters).
 )doc")
-      .def("objects", [](const t::System& s) { return objects_to_list(s.objects()); },
+      .def("objects", [](t::System& s) { return objects_to_list((finish_ba(s), s.objects())); },
            R"doc(Every object cluster ever started, as dicts: the track's fields (id, class_id,
 state, link, frames, T_w_o (K, 4, 4) in the world frame, twist (K, 6), detected = a valid twist
 was estimated that frame, ...) and ``points_o`` (M, 3) its points in the object frame,
@@ -223,7 +230,8 @@ dict
     1.65 m below it); plane : (4,) float64 (n, d), n . X_w + d = 0 on the road, n pointing up;
     num_points : int, road points in the reservoir; num_fits, last_inliers : int.)doc")
       .def("trajectory",
-           [](const t::System& s) {
+           [](t::System& s) {
+             finish_ba(s);
              const auto traj = s.trajectory();
              DoubleArray poses = new_array({static_cast<py::ssize_t>(traj.size()), 4, 4});
              py::array_t<std::int64_t> frames(static_cast<py::ssize_t>(traj.size()));
@@ -238,7 +246,8 @@ dict
            },
            "Poses T_w_c (N, 4, 4) of every tracked frame, refined through their reference keyframes.")
       .def("keyframes",
-           [](const t::System& s) {
+           [](t::System& s) {
+             finish_ba(s);
              const auto ids = s.map().keyframe_ids();
              DoubleArray poses = new_array({static_cast<py::ssize_t>(ids.size()), 4, 4});
              py::array_t<std::int64_t> frames(static_cast<py::ssize_t>(ids.size()));
@@ -253,7 +262,8 @@ dict
            },
            "Keyframes: frame_index (K,) and T_w_c (K, 4, 4).")
       .def("map_points",
-           [](const t::System& s) {
+           [](t::System& s) {
+             finish_ba(s);
              const auto& pts = s.map().points();
              const auto n = static_cast<py::ssize_t>(pts.size());
              DoubleArray X = new_array({n, 3});

@@ -46,6 +46,10 @@ void CameraTracker::set_last_frame(Frame frame) {
   has_last_ = true;
 }
 
+void CameraTracker::refine_last_frame_pose(int frame_index, const Mat4& T_c_w) {
+  if (has_last_ && last_frame_.index == frame_index) last_frame_.T_c_w = T_c_w;
+}
+
 bool CameraTracker::track_motion(Frame& frame, map::Map& map, bool after_loss) {
   // After a loss the last frame has no matches: relocalise in the last local map instead.
   // Without a velocity (the frame after a map start) the prediction is "no motion", off by a

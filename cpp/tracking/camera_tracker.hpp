@@ -38,6 +38,8 @@ class CameraTracker {
   void update_velocity(const Frame& frame);
   // The frame the next motion-model search starts from.
   void set_last_frame(Frame frame);
+  // The last frame's pose as a bundle adjustment refined it, when it is frame `frame_index`.
+  void refine_last_frame_pose(int frame_index, const Mat4& T_c_w);
   void reset();
 
  private:

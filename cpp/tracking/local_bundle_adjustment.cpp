@@ -1,6 +1,7 @@
 #include "tracking/local_bundle_adjustment.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <map>
 #include <unordered_map>
 #include <unordered_set>
@@ -11,16 +12,21 @@
 
 namespace twistslam::tracking {
 
-bool local_bundle_adjustment(map::Map& map, int keyframe_id, int gauge_keyframe,
-                             const geometry::StereoCamera& camera, const LocalBAOptions& options,
-                             const LevelWeights& weights, ObjectBundleTerms* objects) {
+bool prepare_local_ba(const map::Map& map, int keyframe_id, int gauge_keyframe,
+                      const LocalBAOptions& options, const LevelWeights& weights,
+                      ObjectBundleTerms* objects, LocalBAJob* job) {
   const int segment = map.keyframe(keyframe_id).segment;
   std::vector<int> window{keyframe_id};
   for (int kf : map.covisible_keyframes(keyframe_id, options.window - 1))
     if (map.keyframe(kf).segment == segment) window.push_back(kf);
   if (window.size() < 2) return false;  // a lone keyframe: nothing to adjust against
 
-  optim::BAProblem problem;
+  *job = LocalBAJob();
+  job->keyframe_id = keyframe_id;
+  job->frame_index = map.keyframe(keyframe_id).frame_index;
+  job->window = window;
+  job->objects = objects;
+  optim::BAProblem& problem = job->problem;
   std::unordered_map<int, int> kf_slot;
   for (int kf : window) {
     kf_slot[kf] = static_cast<int>(problem.keyframes.size());
@@ -54,8 +60,6 @@ bool local_bundle_adjustment(map::Map& map, int keyframe_id, int gauge_keyframe,
   // Points seen by at least two keyframes of the problem. A point seen once is exactly
   // determined by its own observation (stereo) or not at all (mono): its Schur complement
   // is zero, so it tells the poses nothing and only costs solver time (~half of the window's points).
-  std::vector<int> point_ids;
-  std::vector<std::pair<int, int>> obs_link;  // (point id, keyframe id) per observation
   for (int pid : candidates) {
     const auto& observations = map.point(pid).observations;
     const long in_problem = std::count_if(observations.begin(), observations.end(),
@@ -63,14 +67,14 @@ bool local_bundle_adjustment(map::Map& map, int keyframe_id, int gauge_keyframe,
     if (in_problem < 2) continue;
     const int slot = static_cast<int>(problem.points.size());
     problem.points.push_back({map.point(pid).X_w, false});
-    point_ids.push_back(pid);
+    job->point_ids.push_back(pid);
     for (const auto& [kf, kp] : observations) {
       const auto kf_it = kf_slot.find(kf);
       if (kf_it == kf_slot.end()) continue;
       const map::StereoKeypoints& k = map.keyframe(kf).keypoints;
       problem.observations.push_back({kf_it->second, slot, k.uv[kp], k.u_right[kp],
                                       weights.at(k.octave[kp])});
-      obs_link.emplace_back(pid, kf);
+      job->obs_link.emplace_back(pid, kf);
     }
   }
 
@@ -79,7 +83,13 @@ bool local_bundle_adjustment(map::Map& map, int keyframe_id, int gauge_keyframe,
     for (const auto& [kf, slot] : kf_slot) slot_of_frame[map.keyframe(kf).frame_index] = slot;
     objects->add_bundle_terms(slot_of_frame, options.dynamic_points_per_object, &problem);
   }
+  job->keyframe_slots.assign(kf_slot.begin(), kf_slot.end());
+  std::sort(job->keyframe_slots.begin(), job->keyframe_slots.end());  // one order, whatever the hash
+  return true;
+}
 
+void solve_local_ba(const geometry::StereoCamera& camera, const LocalBAOptions& options, LocalBAJob* job) {
+  const auto start = std::chrono::steady_clock::now();
   optim::BundleAdjustmentOptions ba;
   ba.max_iterations_first = options.iterations_first;
   ba.max_iterations_second = options.iterations_second;
@@ -88,22 +98,40 @@ bool local_bundle_adjustment(map::Map& map, int keyframe_id, int gauge_keyframe,
   ba.num_threads = options.num_threads;
   ba.link_sigma_translation = options.dynamic_link_sigma_translation;
   ba.link_sigma_rotation = options.dynamic_link_sigma_rotation;
-  const optim::BundleAdjustmentReport report = optim::bundle_adjust(problem, camera, ba);
-  if (objects && report.converged) objects->take_bundle_result(problem, report);
+  job->report = optim::bundle_adjust(job->problem, camera, ba);
+  job->solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
 
-  for (const auto& [kf, slot] : kf_slot)
-    if (!problem.keyframes[slot].fixed) map.keyframe(kf).T_c_w = problem.keyframes[slot].T_c_w;
-  for (size_t k = 0; k < point_ids.size(); ++k) map.point(point_ids[k]).X_w = problem.points[k].X_w;
+void apply_local_ba(const LocalBAJob& job, map::Map& map) {
+  const optim::BAProblem& problem = job.problem;
+  const optim::BundleAdjustmentReport& report = job.report;
+  if (job.objects && report.converged) job.objects->take_bundle_result(problem, report);
+
+  for (const auto& [kf, slot] : job.keyframe_slots)
+    if (!problem.keyframes[slot].fixed && map.has_keyframe(kf)) map.keyframe(kf).T_c_w = problem.keyframes[slot].T_c_w;
+  for (size_t k = 0; k < job.point_ids.size(); ++k)
+    if (map.has_point(job.point_ids[k])) map.point(job.point_ids[k]).X_w = problem.points[k].X_w;
   std::unordered_set<int> touched;
-  for (size_t e = 0; e < obs_link.size(); ++e) {
-    if (e < report.outlier.size() && report.outlier[e]) {
-      map.erase_observation(obs_link[e].first, obs_link[e].second);
-      touched.insert(obs_link[e].first);
+  for (size_t e = 0; e < job.obs_link.size(); ++e) {
+    const auto& [pid, kf] = job.obs_link[e];
+    if (e < report.outlier.size() && report.outlier[e] && map.has_point(pid)) {
+      map.erase_observation(pid, kf);
+      touched.insert(pid);
     }
   }
   for (int pid : touched)
     if (map.point(pid).observations.empty()) map.erase_point(pid);
-  for (int kf : window) map.update_covisibility(kf);
+  for (int kf : job.window)
+    if (map.has_keyframe(kf)) map.update_covisibility(kf);
+}
+
+bool local_bundle_adjustment(map::Map& map, int keyframe_id, int gauge_keyframe,
+                             const geometry::StereoCamera& camera, const LocalBAOptions& options,
+                             const LevelWeights& weights, ObjectBundleTerms* objects) {
+  LocalBAJob job;
+  if (!prepare_local_ba(map, keyframe_id, gauge_keyframe, options, weights, objects, &job)) return false;
+  solve_local_ba(camera, options, &job);
+  apply_local_ba(job, map);
   return true;
 }
 

@@ -9,6 +9,13 @@
 #include "tracking/local_bundle_adjustment.hpp"
 
 namespace twistslam::tracking {
+
+struct LocalMapper::PendingBA {
+  LocalBAJob job;
+  std::thread worker;
+  std::exception_ptr error;
+};
+
 namespace {
 // ORB-SLAM2 requires this many tracked inliers before a keyframe is worth adding.
 constexpr int kMinKeyframeInliers = 15;
@@ -26,7 +33,15 @@ LocalMapper::LocalMapper(const geometry::StereoCamera& camera, const SlamOptions
     : camera_(camera), tracking_options_(options.tracking), keyframe_options_(options.keyframes),
       ba_options_(options.local_ba), map_options_(options.map), weights_(std::move(weights)) {}
 
+LocalMapper::~LocalMapper() { join_worker(); }
+
+void LocalMapper::join_worker() {
+  if (pending_ && pending_->worker.joinable()) pending_->worker.join();
+}
+
 void LocalMapper::reset() {
+  join_worker();
+  pending_.reset();
   segment_ = segment_first_keyframe_ = last_keyframe_frame_ = -1;
   recent_points_.clear();
 }
@@ -93,13 +108,48 @@ KeyframeInsertion LocalMapper::insert_keyframe(Frame& frame, map::Map& map, Obje
   map.update_covisibility(id);
   last_keyframe_frame_ = frame.index;
   cull_recent_points(map, id);
-  const auto ba_start = std::chrono::steady_clock::now();
-  insertion.bundle_adjusted =
-      local_bundle_adjustment(map, id, segment_first_keyframe_, camera_, ba_options_, weights_, objects);
-  if (insertion.bundle_adjusted)
-    insertion.ba_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - ba_start).count();
+  if (ba_options_.asynchronous) {
+    auto pending = std::make_unique<PendingBA>();
+    if (prepare_local_ba(map, id, segment_first_keyframe_, ba_options_, weights_, objects, &pending->job)) {
+      PendingBA* p = pending.get();
+      // the thread reads only the job and copies of the camera and options
+      p->worker = std::thread([p, camera = camera_, options = ba_options_] {
+        try {
+          solve_local_ba(camera, options, &p->job);
+        } catch (...) {
+          p->error = std::current_exception();
+        }
+      });
+      pending_ = std::move(pending);
+      insertion.ba_pending = true;
+      return insertion;  // the map bound follows the BA (finish_bundle_adjustment)
+    }
+  } else {
+    const auto ba_start = std::chrono::steady_clock::now();
+    insertion.bundle_adjusted =
+        local_bundle_adjustment(map, id, segment_first_keyframe_, camera_, ba_options_, weights_, objects);
+    if (insertion.bundle_adjusted)
+      insertion.ba_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - ba_start).count();
+  }
   bound_map_size(map);
   return insertion;
+}
+
+FinishedBundleAdjustment LocalMapper::finish_bundle_adjustment(map::Map& map) {
+  FinishedBundleAdjustment done;
+  if (!pending_) return done;
+  const auto wait_start = std::chrono::steady_clock::now();
+  join_worker();
+  done.wait_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wait_start).count();
+  const std::unique_ptr<PendingBA> pending = std::move(pending_);
+  if (pending->error) std::rethrow_exception(pending->error);
+  apply_local_ba(pending->job, map);
+  bound_map_size(map);
+  done.applied = true;
+  done.keyframe_id = pending->job.keyframe_id;
+  done.frame_index = pending->job.frame_index;
+  done.solve_ms = pending->job.solve_ms;
+  return done;
 }
 
 int LocalMapper::create_stereo_points(Frame& frame, map::Map& map, int keyframe_id) {

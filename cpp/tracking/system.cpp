@@ -49,6 +49,8 @@ System::System(const geometry::StereoCamera& camera, const SlamOptions& options)
                       options.lidar_objects) {}
 
 void System::reset() {
+  local_mapper_.reset();
+  finished_ba_ = FinishedBundleAdjustment();  // drops a pending BA before the map it refers to
   map_.clear();
   road_plane_ = objects::RoadPlaneEstimator();
   road_up_w_ = Vec3(0, -1, 0);
@@ -84,6 +86,13 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
                                                 &frame, object_mask, vehicle_instances);
   result.timings_ms = std::move(built.timings_ms);
   result.num_lidar_depth = built.num_lidar_depth;
+  // the previous keyframe's BA solved beside the front end above; tracking needs its map
+  finish_local_ba();
+  if (finished_ba_.applied) {  // solved in its own thread; the wait is this frame's
+    result.timings_ms.emplace_back("local_ba", finished_ba_.solve_ms);
+    result.timings_ms.emplace_back("local_ba_wait", finished_ba_.wait_ms);
+    finished_ba_ = FinishedBundleAdjustment();
+  }
   StageTimer timer(&result);
   frame.T_c_w = camera_tracker_.predicted_pose();
   bool tracked = false;
@@ -139,6 +148,7 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
       result.is_keyframe = true;
     }
     timer.lap("keyframe");
+    if (insertion.ba_pending) pending_keyframe_T_c_w_ = frame.T_c_w;
     if (insertion.bundle_adjusted) {  // report the BA apart from the rest of the insertion
       result.timings_ms.back().second -= insertion.ba_ms;
       result.timings_ms.emplace_back("local_ba", insertion.ba_ms);
@@ -186,13 +196,35 @@ void System::add_road_points(const Frame& frame, const cv::Mat& labels, const Po
   if (road_plane_.valid()) road_up_w_ = road_plane_.normal_up();
 }
 
+void System::finish_local_ba() {
+  const FinishedBundleAdjustment done = local_mapper_.finish_bundle_adjustment(map_);
+  if (!done.applied) return;
+  finished_ba_ = done;  // its times go with the next frame's result
+  // what the synchronous BA refined before the keyframe's track() returned
+  camera_tracker_.refine_last_frame_pose(done.frame_index, map_.keyframe(done.keyframe_id).T_c_w);
+  if (!trajectory_.empty() && trajectory_.back().frame_index == done.frame_index &&
+      trajectory_.back().reference_keyframe == done.keyframe_id)
+    trajectory_.back().T_c_r = pending_keyframe_T_c_w_ * map_.keyframe(done.keyframe_id).T_w_c();
+}
+
 void System::record_trajectory(const Frame& frame, Status status) {
   TrajectoryEntry entry{frame.index, frame.timestamp, reference_keyframe_, frame.T_c_w, status};
   if (reference_keyframe_ >= 0) entry.T_c_r = frame.T_c_w * map_.keyframe(reference_keyframe_).T_w_c();
   trajectory_.push_back(entry);
 }
 
-std::vector<std::pair<TrajectoryEntry, Mat4>> System::trajectory() const {
+const map::Map& System::map() {
+  finish_local_ba();
+  return map_;
+}
+
+const ObjectTracker& System::objects() {
+  finish_local_ba();
+  return object_tracker_;
+}
+
+std::vector<std::pair<TrajectoryEntry, Mat4>> System::trajectory() {
+  finish_local_ba();
   std::vector<std::pair<TrajectoryEntry, Mat4>> out;
   out.reserve(trajectory_.size());
   for (const auto& e : trajectory_) {
@@ -205,6 +237,7 @@ std::vector<std::pair<TrajectoryEntry, Mat4>> System::trajectory() const {
 }
 
 ObjectSmoothingReport System::smooth_objects() {
+  finish_local_ba();
   // the objects were tracked against each frame's pose as it was then; local BA has refined
   // the keyframes since, and through them every frame (trajectory())
   std::map<int, Mat4> T_c_w_of_frame;

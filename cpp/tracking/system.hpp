@@ -63,21 +63,28 @@ class System {
                     const cv::Mat& instances = cv::Mat(), const cv::Mat& flow = cv::Mat(),
                     const std::vector<objects::Detection>& detections = {});
 
+  // The accessors below first apply a local BA still solving in its thread
+  // (local_ba.asynchronous), so they always see the state after the last frame's BA.
   // T_w_c of every frame tracked so far, refined through the keyframes.
-  std::vector<std::pair<TrajectoryEntry, Mat4>> trajectory() const;
-  const map::Map& map() const { return map_; }
-  const ObjectTracker& objects() const { return object_tracker_; }
+  std::vector<std::pair<TrajectoryEntry, Mat4>> trajectory();
+  const map::Map& map();
+  const ObjectTracker& objects();
+  // Applies the pending local BA (LocalMapper::finish_bundle_adjustment) and what the
+  // synchronous BA would have refined at once: the last frame's pose, the keyframe frame's
+  // trajectory entry. Nothing when none is pending; the accessors and track() call it.
+  void finish_local_ba();
   // The object tracks' final smoothing against the refined trajectory (ObjectTracker::
   // smooth_tracks): once the sequence ends; tracking more frames afterwards is allowed, but
   // a smoothed track is never smoothed again.
   ObjectSmoothingReport smooth_objects();
-  const objects::RoadPlaneEstimator& road_plane() const { return road_plane_; }
+  const objects::RoadPlaneEstimator& road_plane() const { return road_plane_; }  // no BA input
   const SlamOptions& options() const { return options_; }
   void reset();
 
  private:
   // The frame's pose relative to the reference keyframe (BA corrections reach it later).
   void record_trajectory(const Frame& frame, Status status);
+  FinishedBundleAdjustment finished_ba_;  // applied since the last track(): reported by the next
 
   SlamOptions options_;
   geometry::StereoCamera camera_;
@@ -92,6 +99,7 @@ class System {
   // trajectory stores poses relative to it, and it is the keyframe decision's reference.
   int reference_keyframe_ = -1;
   std::vector<TrajectoryEntry> trajectory_;
+  Mat4 pending_keyframe_T_c_w_ = Mat4::Identity();  // tracked pose of the keyframe being adjusted
   // Road points of each keyframe (stereo keypoints labelled road_class_id, and with
   // visual_objects.road_lidar_points the scan's returns on road pixels away from the mask's
   // boundary, tracking/road_lidar_points.hpp) -> the road plane, whose normal is the planar

@@ -156,6 +156,11 @@ class LocalBAConfig:
                              "sums the threads' parts in scheduling order); 2 makes the simulated "
                              "urban loop ~30 % faster (46 -> 32 ms/frame median) with results "
                              "differing by ~1e-14 m between runs")
+    asynchronous: bool = param(
+        True, "the BA's solve runs in a thread of its own beside the next frame's features and "
+        "stereo, and is applied before that frame is tracked: the same results as the "
+        "synchronous BA (tests/python/test_visual_objects.py), the loop faster on 2 cores "
+        "(benchmarks/bench_camera.py has the figures)")
     dynamic_objects: bool = param(
         False, "e_dyna (paper eq. 9): the tracked objects' keypoints and keyframe poses join "
         "the BA, tied by their link, so that they inform the cameras. Off by default, "

@@ -19,7 +19,9 @@ class Timings:
     stages : name -> (N,) ms. ``load`` (reading images and labels, in a background thread),
         ``track`` (the whole core call) and the core's own stages (``features``, ``stereo``, ``track_motion``,
         ``track_local_map``, ``keyframe``, ``local_ba``); NaN where a stage did not run
-        on that frame (local BA runs on keyframes only).
+        on that frame (local BA runs on keyframes only; with ``local_ba.asynchronous`` it is
+        solved beside the next frame's front end and reported by that frame, with
+        ``local_ba_wait``, the time tracking waited for it).
     after_loop_ms : name -> ms of the steps run once after the last frame, outside the
         per-frame loop and its ``hz`` (``object_smoothing``: the final smoothing of the object
         tracks, ``visual_objects.final_smoothing``).

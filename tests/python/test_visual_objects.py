@@ -211,3 +211,28 @@ def test_final_smoothing_refines_the_tracks_and_keeps_the_online_poses(sim, resu
         assert s.rpe_t < 1.25 * online_car.rpe_t, gt_id
     # the translation improves on the car one cluster tracks throughout
     assert any(s.rpe_t < 0.9 * cars_o[gt_id].rpe_t for gt_id, s in cars_s.items())
+
+
+def test_asynchronous_ba_gives_the_synchronous_results(sim):
+    """local_ba.asynchronous (the default) solves each keyframe's BA in a thread of its own
+    beside the next frame's front end and applies it before that frame is tracked: the same
+    cameras, objects and map, bit for bit, with the objects in the BA (e_dyna) too."""
+    runs = {}
+    for asynchronous in (True, False):
+        config = {"local_ba": {"asynchronous": asynchronous, "dynamic_objects": True}}
+        runs[asynchronous] = twistslam.run(KittiTracking(sim, "0000"), config, progress=False,
+                                           segmentation="files", flow="files")
+    a, s = runs[True], runs[False]
+    assert a.config.local_ba.asynchronous and not s.config.local_ba.asynchronous
+    np.testing.assert_array_equal(a.tracked_poses, s.tracked_poses)
+    np.testing.assert_array_equal(a.camera_poses, s.camera_poses)
+    assert [o.track_id for o in a.objects] == [o.track_id for o in s.objects]
+    for x, y in zip(a.objects, s.objects):
+        np.testing.assert_array_equal(x.T_w_o, y.T_w_o)
+    for key in s.map_points:
+        np.testing.assert_array_equal(a.map_points[key], s.map_points[key])
+    # the asynchronous BA is reported on the frame after its keyframe, with the wait for it
+    ran = np.isfinite(a.timings.stages["local_ba"])
+    np.testing.assert_array_equal(ran, np.isfinite(a.timings.stages["local_ba_wait"]))
+    keyframes = np.flatnonzero(a.is_keyframe[:-1]) + 1
+    assert ran.sum() >= 3 and set(np.flatnonzero(ran)) <= set(keyframes)

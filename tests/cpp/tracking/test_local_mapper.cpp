@@ -163,27 +163,47 @@ TEST(LocalMapper, AStoppedCameraGetsNoTemporalKeyframe) {
   EXPECT_TRUE(always.need_keyframe(still, map2, reference2));
 }
 
-TEST(LocalMapper, SecondKeyframeIsBundleAdjustedAgainstTheFirst) {
-  const std::vector<Vec3> points = scene_points();
-  tracking::LocalMapper mapper = make_mapper();
-  map::Map map;
+// A map with a segment's first keyframe, and frame 2 seeing the same points (all matched)
+// and 24 new ones, its tracked pose 4 cm off.
+struct TwoFrames {
+  std::vector<Vec3> points = scene_points();
   tracking::Frame first = frame_seeing(points, 0);
-  const int first_id = mapper.start_segment(first, map).keyframe_id;
+  tracking::Frame second;
+  int first_id = -1;
 
-  // Frame 2 sees the same points (all matched) and 24 new ones; its tracked pose is 4 cm off.
-  std::vector<Vec3> seen = points;
-  for (const Vec3& X : scene_points(/*depth_shift=*/3.0)) {
-    if (seen.size() == points.size() + 24) break;
-    seen.push_back(X + Vec3(0.3, 0.2, 0));
+  explicit TwoFrames(tracking::LocalMapper& mapper, map::Map& map) {
+    first_id = mapper.start_segment(first, map).keyframe_id;
+    std::vector<Vec3> seen = points;
+    for (const Vec3& X : scene_points(/*depth_shift=*/3.0)) {
+      if (seen.size() == points.size() + 24) break;
+      seen.push_back(X + Vec3(0.3, 0.2, 0));
+    }
+    second = frame_seeing(seen, 2, /*first_descriptor=*/7);
+    for (size_t i = 0; i < points.size(); ++i) second.point_ids[i] = first.point_ids[i];
+    second.T_c_w(0, 3) += 0.04;
   }
-  tracking::Frame second = frame_seeing(seen, 2, /*first_descriptor=*/7);
-  for (size_t i = 0; i < points.size(); ++i) second.point_ids[i] = first.point_ids[i];
-  second.T_c_w(0, 3) += 0.04;
+};
+
+tracking::SlamOptions synchronous_ba() {
+  tracking::SlamOptions options;
+  options.local_ba.asynchronous = false;
+  return options;
+}
+
+TEST(LocalMapper, SecondKeyframeIsBundleAdjustedAgainstTheFirst) {
+  tracking::LocalMapper mapper = make_mapper(synchronous_ba());
+  map::Map map;
+  TwoFrames frames(mapper, map);
+  const std::vector<Vec3>& points = frames.points;
+  const tracking::Frame& first = frames.first;
+  const int first_id = frames.first_id;
+  tracking::Frame& second = frames.second;
   ASSERT_NEAR(translation_error(second.T_c_w, true_T_c_w(2)), 0.04, 1e-9);
 
   const tracking::KeyframeInsertion insertion = mapper.insert_keyframe(second, map);
   EXPECT_EQ(insertion.new_points, 24);
   EXPECT_TRUE(insertion.bundle_adjusted);
+  EXPECT_FALSE(insertion.ba_pending);
   EXPECT_GT(insertion.ba_ms, 0.0);  // reported in the result, the only way out of the mapper
   EXPECT_EQ(map.num_keyframes(), 2u);
   EXPECT_EQ(map.num_points(), points.size() + 24);
@@ -191,4 +211,51 @@ TEST(LocalMapper, SecondKeyframeIsBundleAdjustedAgainstTheFirst) {
   // exact observations: the BA finds the true pose again (seen: 0.06 mm)
   EXPECT_LT(translation_error(map.keyframe(insertion.keyframe_id).T_c_w, true_T_c_w(2)), 0.004);
   EXPECT_EQ(map.point(first.point_ids[20]).observations.size(), 2u);
+}
+
+TEST(LocalMapper, AsynchronousBundleAdjustmentChangesTheMapOnlyWhenFinishedAndAsTheSynchronousOne) {
+  tracking::LocalMapper sync_mapper = make_mapper(synchronous_ba());
+  map::Map sync_map;
+  TwoFrames sync_frames(sync_mapper, sync_map);
+  sync_mapper.insert_keyframe(sync_frames.second, sync_map);
+
+  tracking::LocalMapper mapper = make_mapper();  // local_ba.asynchronous: the default
+  map::Map map;
+  TwoFrames frames(mapper, map);
+  EXPECT_FALSE(mapper.finish_bundle_adjustment(map).applied);  // nothing pending yet
+  const tracking::KeyframeInsertion insertion = mapper.insert_keyframe(frames.second, map);
+  EXPECT_TRUE(insertion.ba_pending);
+  EXPECT_FALSE(insertion.bundle_adjusted);
+  EXPECT_TRUE(mapper.bundle_adjustment_pending());
+  // until finished, the keyframe keeps its tracked pose, 4 cm off
+  EXPECT_NEAR(translation_error(map.keyframe(insertion.keyframe_id).T_c_w, true_T_c_w(2)), 0.04, 1e-9);
+
+  const tracking::FinishedBundleAdjustment done = mapper.finish_bundle_adjustment(map);
+  EXPECT_TRUE(done.applied);
+  EXPECT_EQ(done.keyframe_id, insertion.keyframe_id);
+  EXPECT_EQ(done.frame_index, 2);
+  EXPECT_GT(done.solve_ms, 0.0);
+  EXPECT_GE(done.wait_ms, 0.0);
+  EXPECT_FALSE(mapper.bundle_adjustment_pending());
+  EXPECT_FALSE(mapper.finish_bundle_adjustment(map).applied);  // applied once
+  EXPECT_LT(translation_error(map.keyframe(insertion.keyframe_id).T_c_w, true_T_c_w(2)), 0.004);
+  // bit for bit the synchronous BA's map
+  ASSERT_EQ(map.num_points(), sync_map.num_points());
+  for (int id : map.keyframe_ids()) EXPECT_EQ(map.keyframe(id).T_c_w, sync_map.keyframe(id).T_c_w) << id;
+  for (const auto& [pid, p] : map.points()) {
+    EXPECT_EQ(p.X_w, sync_map.point(pid).X_w) << pid;
+    EXPECT_EQ(p.observations.size(), sync_map.point(pid).observations.size()) << pid;
+  }
+}
+
+TEST(LocalMapper, ResetDropsAPendingBundleAdjustmentUnapplied) {
+  tracking::LocalMapper mapper = make_mapper();
+  map::Map map;
+  TwoFrames frames(mapper, map);
+  const tracking::KeyframeInsertion insertion = mapper.insert_keyframe(frames.second, map);
+  ASSERT_TRUE(insertion.ba_pending);
+  mapper.reset();  // waits for the thread, keeps nothing of it
+  EXPECT_FALSE(mapper.bundle_adjustment_pending());
+  EXPECT_FALSE(mapper.finish_bundle_adjustment(map).applied);
+  EXPECT_NEAR(translation_error(map.keyframe(insertion.keyframe_id).T_c_w, true_T_c_w(2)), 0.04, 1e-9);
 }

@@ -104,6 +104,42 @@ TEST(TrackingSystem, TracksARenderedSequenceWithKnownMotion) {
   EXPECT_LT(step_error, 0.006);  // m per frame, of 0.25 m steps (seen: 2.5 mm)
 }
 
+// local_ba.asynchronous solves each keyframe's BA beside the next frame's front end and
+// applies it before that frame is tracked: every pose and the map are those of the
+// synchronous BA, bit for bit, and the accessors apply the last keyframe's BA still pending.
+TEST(TrackingSystem, AsynchronousBundleAdjustmentGivesTheSynchronousResults) {
+  tracking::SlamOptions sync_options;
+  sync_options.local_ba.asynchronous = false;
+  tracking::System sync_system(kitti_camera(), sync_options);
+  tracking::System async_system(kitti_camera(), tracking::SlamOptions{});
+  ASSERT_TRUE(async_system.options().local_ba.asynchronous);  // the default
+  const auto& frames = sequence();
+  const int n = 9;  // frame 8 is a keyframe: its BA is pending when the loop ends
+  int async_reported = 0, sync_reported = 0;
+  for (int i = 0; i < n; ++i) {
+    const tracking::TrackResult a = sync_system.track(i, 0.1 * i, frames[i].left, frames[i].right);
+    const tracking::TrackResult b = async_system.track(i, 0.1 * i, frames[i].left, frames[i].right);
+    EXPECT_EQ(a.T_w_c, b.T_w_c) << i;
+    EXPECT_EQ(a.is_keyframe, b.is_keyframe) << i;
+    EXPECT_EQ(a.num_inliers, b.num_inliers) << i;
+    sync_reported += has_stage(a, "local_ba");
+    async_reported += has_stage(b, "local_ba");  // on the frame after its keyframe
+    EXPECT_EQ(has_stage(b, "local_ba"), has_stage(b, "local_ba_wait")) << i;
+    if (i == n - 1) ASSERT_TRUE(b.is_keyframe);
+  }
+  EXPECT_EQ(async_reported, sync_reported - 1);  // the last one is applied by the accessors
+  const auto a = sync_system.trajectory();
+  const auto b = async_system.trajectory();
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].second, b[i].second) << i;
+  const map::Map& ma = sync_system.map();
+  const map::Map& mb = async_system.map();
+  ASSERT_EQ(ma.keyframe_ids(), mb.keyframe_ids());
+  for (int id : ma.keyframe_ids()) EXPECT_EQ(ma.keyframe(id).T_c_w, mb.keyframe(id).T_c_w) << id;
+  ASSERT_EQ(ma.num_points(), mb.num_points());
+  for (const auto& [pid, p] : ma.points()) EXPECT_EQ(p.X_w, mb.point(pid).X_w) << pid;
+}
+
 // Tracks frames [0, n) with the frames in `blank` replaced by uniform grey; returns statuses.
 std::vector<tracking::Status> track_with_blanks(tracking::System& system, int n,
                                                 const std::vector<int>& blank) {
@@ -121,7 +157,7 @@ std::vector<tracking::Status> track_with_blanks(tracking::System& system, int n,
   return status;
 }
 
-int num_segments(const tracking::System& system) {
+int num_segments(tracking::System& system) {
   int last = -1;
   for (const auto& [id, kf] : system.map().keyframes()) last = std::max(last, kf.segment);
   return last + 1;
