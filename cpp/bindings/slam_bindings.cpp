@@ -185,7 +185,7 @@ dict
     depth), timings_ms {stage: ms}, num_objects_tracked, num_objects_new,
     num_object_points (matched inlier points of all clusters).
 )doc")
-      .def("objects", [](t::System& s) { return objects_to_list((finish_ba(s), s.objects())); },
+      .def("objects", [](t::System& s) { finish_ba(s); return objects_to_list(s.objects()); },
            R"doc(Every object cluster ever started, as dicts: the track's fields (id, class_id,
 state, link, frames, T_w_o (K, 4, 4) in the world frame, twist (K, 6), detected = a valid twist
 was estimated that frame, ...) and ``points_o`` (M, 3) its points in the object frame,

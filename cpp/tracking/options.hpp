@@ -50,6 +50,8 @@ struct LocalBAOptions {
   int num_threads = 1;  // 1: bit-for-bit reproducible runs (config.py has the figures)
   // the solve runs in a thread of its own beside the next frame's front end (config.py)
   bool asynchronous = true;
+  // frames tracked against the map before the asynchronous BA is applied to it (config.py)
+  int apply_delay_frames = 0;
   // e_dyna: the tracked objects' keypoints, poses and points join the BA (config.py)
   bool dynamic_objects = false;
   int dynamic_points_per_object = 20;         // the most often found points of each object
@@ -134,6 +136,8 @@ void for_each_option(LocalBAOptions& o, Visit&& visit) {
   visit("huber_mono", o.huber_mono, 0.01, 1000.0);
   visit("num_threads", o.num_threads, 1, 256);  // threads: more than any CPU here
   visit("asynchronous", o.asynchronous, 0, 1);
+  // frames: one BA pending at a time; a keyframe insertion always applies it first
+  visit("apply_delay_frames", o.apply_delay_frames, 0, 1);
   visit("dynamic_objects", o.dynamic_objects, 0, 1);
   visit("dynamic_points_per_object", o.dynamic_points_per_object, 0, 100000);  // a cluster's max_points bound
   visit("dynamic_link_sigma_translation", o.dynamic_link_sigma_translation, 1e-6, 100.0);  // m

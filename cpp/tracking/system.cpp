@@ -86,13 +86,16 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
                                                 &frame, object_mask, vehicle_instances);
   result.timings_ms = std::move(built.timings_ms);
   result.num_lidar_depth = built.num_lidar_depth;
-  // the previous keyframe's BA solved beside the front end above; tracking needs its map
-  finish_local_ba();
-  if (finished_ba_.applied) {  // solved in its own thread; the wait is this frame's
-    result.timings_ms.emplace_back("local_ba", finished_ba_.solve_ms);
-    result.timings_ms.emplace_back("local_ba_wait", finished_ba_.wait_ms);
-    finished_ba_ = FinishedBundleAdjustment();
+  // The previous keyframe's BA solved beside the front end above (and, with
+  // local_ba.apply_delay_frames, beside the frames tracked since): tracking now needs its map.
+  if (local_mapper_.bundle_adjustment_pending()) {
+    const bool objects_in_ba = options_.local_ba.dynamic_objects;  // their tracks wait for it
+    if (objects_in_ba || frames_since_ba_start_ >= options_.local_ba.apply_delay_frames)
+      finish_local_ba();
+    else
+      ++frames_since_ba_start_;  // this frame is tracked against the map as it was
   }
+  const double wait_before_tracking_ms = finished_ba_.wait_ms;
   StageTimer timer(&result);
   frame.T_c_w = camera_tracker_.predicted_pose();
   bool tracked = false;
@@ -116,6 +119,7 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
     frame.T_c_w = camera_tracker_.predicted_pose();
     frame.clear_matches();
     if (local_mapper_.can_start_segment(frame)) {
+      finish_local_ba();  // the map must not change under a pending BA
       reference_keyframe_ = local_mapper_.start_segment(frame, map_).keyframe_id;
       result.status = fresh ? Status::kInitialized : Status::kRelocalized;
       result.is_keyframe = true;
@@ -141,6 +145,7 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
     state_ = State::kTracking;
     KeyframeInsertion insertion;
     if (!result.is_keyframe && local_mapper_.need_keyframe(frame, map_, reference_keyframe_)) {
+      finish_local_ba();  // the map must not change under a pending BA
       const bool dynamic = track_objects && options_.local_ba.dynamic_objects;
       if (dynamic) object_tracker_.mark_keyframe(frame.index, options_.local_ba.window);
       insertion = local_mapper_.insert_keyframe(frame, map_, dynamic ? &object_tracker_ : nullptr);
@@ -148,7 +153,12 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
       result.is_keyframe = true;
     }
     timer.lap("keyframe");
-    if (insertion.ba_pending) pending_keyframe_T_c_w_ = frame.T_c_w;
+    // a wait for the previous BA before this insertion is reported apart (local_ba_wait)
+    result.timings_ms.back().second -= finished_ba_.wait_ms - wait_before_tracking_ms;
+    if (insertion.ba_pending) {
+      pending_keyframe_T_c_w_ = frame.T_c_w;
+      frames_since_ba_start_ = 0;
+    }
     if (insertion.bundle_adjusted) {  // report the BA apart from the rest of the insertion
       result.timings_ms.back().second -= insertion.ba_ms;
       result.timings_ms.emplace_back("local_ba", insertion.ba_ms);
@@ -162,6 +172,11 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
     timer.lap("road_plane");
   }
 
+  if (finished_ba_.applied) {  // solved in its own thread; the wait is this frame's
+    result.timings_ms.emplace_back("local_ba", finished_ba_.solve_ms);
+    result.timings_ms.emplace_back("local_ba_wait", finished_ba_.wait_ms);
+    finished_ba_ = FinishedBundleAdjustment();
+  }
   record_trajectory(frame, result.status);
   result.T_w_c = geometry::se3_inverse(frame.T_c_w);
   result.num_inliers = frame.num_matched_inliers();
@@ -199,12 +214,15 @@ void System::add_road_points(const Frame& frame, const cv::Mat& labels, const Po
 void System::finish_local_ba() {
   const FinishedBundleAdjustment done = local_mapper_.finish_bundle_adjustment(map_);
   if (!done.applied) return;
-  finished_ba_ = done;  // its times go with the next frame's result
+  finished_ba_ = done;  // its times go with this or the next frame's result
   // what the synchronous BA refined before the keyframe's track() returned
   camera_tracker_.refine_last_frame_pose(done.frame_index, map_.keyframe(done.keyframe_id).T_c_w);
-  if (!trajectory_.empty() && trajectory_.back().frame_index == done.frame_index &&
-      trajectory_.back().reference_keyframe == done.keyframe_id)
-    trajectory_.back().T_c_r = pending_keyframe_T_c_w_ * map_.keyframe(done.keyframe_id).T_w_c();
+  for (auto e = trajectory_.rbegin(); e != trajectory_.rend(); ++e) {
+    if (e->frame_index != done.frame_index) continue;
+    if (e->reference_keyframe == done.keyframe_id)
+      e->T_c_r = pending_keyframe_T_c_w_ * map_.keyframe(done.keyframe_id).T_w_c();
+    break;
+  }
 }
 
 void System::record_trajectory(const Frame& frame, Status status) {

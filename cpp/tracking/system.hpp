@@ -100,6 +100,7 @@ class System {
   int reference_keyframe_ = -1;
   std::vector<TrajectoryEntry> trajectory_;
   Mat4 pending_keyframe_T_c_w_ = Mat4::Identity();  // tracked pose of the keyframe being adjusted
+  int frames_since_ba_start_ = 0;  // frames tracked while it was pending (apply_delay_frames)
   // Road points of each keyframe (stereo keypoints labelled road_class_id, and with
   // visual_objects.road_lidar_points the scan's returns on road pixels away from the mask's
   // boundary, tracking/road_lidar_points.hpp) -> the road plane, whose normal is the planar

@@ -219,7 +219,8 @@ def test_asynchronous_ba_gives_the_synchronous_results(sim):
     cameras, objects and map, bit for bit, with the objects in the BA (e_dyna) too."""
     runs = {}
     for asynchronous in (True, False):
-        config = {"local_ba": {"asynchronous": asynchronous, "dynamic_objects": True}}
+        config = {"local_ba": {"asynchronous": asynchronous, "apply_delay_frames": 0,
+                               "dynamic_objects": True}}
         runs[asynchronous] = twistslam.run(KittiTracking(sim, "0000"), config, progress=False,
                                            segmentation="files", flow="files")
     a, s = runs[True], runs[False]
