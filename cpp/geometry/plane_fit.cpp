@@ -1,6 +1,7 @@
 #include "geometry/plane_fit.hpp"
 
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -14,13 +15,30 @@ Vec4 oriented(const Vec3& n, double d) {
   return d < 0 ? Vec4(-n.x(), -n.y(), -n.z(), -d) : Vec4(n.x(), n.y(), n.z(), d);
 }
 
+double plane_distance(const Points3& P, Eigen::Index i, const Vec4& plane) {
+  return P(i, 0) * plane.x() + P(i, 1) * plane.y() + P(i, 2) * plane.z() + plane.w();
+}
+
 int mark_inliers(const Points3& P, const Vec4& plane, double thr, std::vector<std::uint8_t>* flags) {
-  const Eigen::VectorXd dist = (P * plane.head<3>()).array() + plane.w();
   int count = 0;
-  for (Eigen::Index i = 0; i < dist.size(); ++i) {
-    const bool in = std::abs(dist[i]) <= thr;
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
+    const bool in = std::abs(plane_distance(P, i, plane)) <= thr;
     if (flags) (*flags)[i] = in;
     count += in;
+  }
+  return count;
+}
+
+// The inliers of a RANSAC hypothesis, or -1 once it can no longer exceed `to_beat` (even if
+// every point left were an inlier): most samples are off the plane and stop early.
+int count_inliers_above(const Points3& P, const Vec4& plane, double thr, int to_beat) {
+  constexpr Eigen::Index kBlock = 256;  // points between two checks
+  const Eigen::Index n = P.rows();
+  int count = 0;
+  for (Eigen::Index start = 0; start < n; start += kBlock) {
+    const Eigen::Index end = std::min(n, start + kBlock);
+    for (Eigen::Index i = start; i < end; ++i) count += std::abs(plane_distance(P, i, plane)) <= thr;
+    if (count + (n - end) <= to_beat) return -1;
   }
   return count;
 }
@@ -65,7 +83,7 @@ PlaneFit fit_plane_ransac(const Points3& points, const PlaneFitOptions& options)
     if (len < 1e-12) continue;  // collinear or repeated sample
     const Vec3 u = normal / len;
     const Vec4 candidate = oriented(u, -u.dot(a));
-    const int count = mark_inliers(points, candidate, options.inlier_threshold, nullptr);
+    const int count = count_inliers_above(points, candidate, options.inlier_threshold, best_count);
     if (count > best_count) {
       best_count = count;
       best = candidate;
@@ -84,8 +102,9 @@ PlaneFit fit_plane_ransac(const Points3& points, const PlaneFitOptions& options)
   }
   fit.num_inliers = mark_inliers(points, fit.plane, options.inlier_threshold, &fit.inliers);
   const Points3 in = gather(points, fit.inliers, fit.num_inliers);
-  const Eigen::VectorXd dist = (in * fit.plane.head<3>()).array() + fit.plane.w();
-  fit.rms = fit.num_inliers > 0 ? std::sqrt(dist.squaredNorm() / fit.num_inliers) : 0.0;
+  double sum_sq = 0;
+  for (Eigen::Index i = 0; i < in.rows(); ++i) sum_sq += std::pow(plane_distance(in, i, fit.plane), 2);
+  fit.rms = fit.num_inliers > 0 ? std::sqrt(sum_sq / fit.num_inliers) : 0.0;
   return fit;
 }
 

@@ -36,6 +36,26 @@ def test_hull_fill_covers_the_hull_and_the_points_pixels():
     assert huge[:5].all() and not huge[5:].any()
 
 
+def test_convex_hull_drops_interior_points_without_changing_the_hull():
+    """The Akl-Toussaint filter before the monotone chain is exact: on clouds with
+    duplicates, collinear runs, points on a circle (every one a hull vertex) and thousands of
+    interior points, the hull is vertex for vertex the chain's on all points."""
+    from twistslam.perception.hull_fill import _drop_interior, _monotone_chain, convex_hull
+
+    rng = np.random.default_rng(0)
+    angles = rng.uniform(0, 2 * np.pi, 500)
+    clouds = [rng.normal(size=(3000, 2)) * 40 + [600, 180],
+              rng.integers(0, 12, size=(800, 2)).astype(float),  # duplicates, collinear edges
+              np.stack([np.cos(angles), np.sin(angles)], axis=1) * 100,  # all on the hull
+              np.array([[0.0, 0], [10, 0], [5, 0], [0, 0]] * 10)]  # collinear: a segment
+    for points in clouds:
+        expected = _monotone_chain(np.unique(points, axis=0))
+        np.testing.assert_array_equal(convex_hull(points), expected)
+    # it does drop: only a few of 3000 normal points can lie on the hull
+    assert len(_drop_interior(clouds[0])) < 300
+    assert len(_drop_interior(clouds[2])) == 500  # nothing strictly inside
+
+
 def test_sim_masks_from_boxes_match_the_exact_car_pixels(sim_sequence):
     """Measured over seeds 3, 7, 11 (3 frames each, 621x188): car-class IoU 0.84-0.94, cars
     of >= 500 px not cut by the border 0.80-0.96, road IoU 0.74-0.90 (part of the sidewalk

@@ -5,10 +5,43 @@ from __future__ import annotations
 import numpy as np
 
 
+#: Below this many points the hull is computed on all of them (the filter would not pay).
+_FILTER_MIN_POINTS = 32
+
+
 def convex_hull(points: np.ndarray) -> np.ndarray:
     """(K, 2) hull vertices of (N, 2) points, counter-clockwise (Andrew's monotone chain);
-    fewer than 3 distinct points are returned as they are."""
-    pts = np.unique(np.asarray(points, dtype=np.float64), axis=0)  # sorted by x, then y
+    fewer than 3 distinct points are returned as they are. Points strictly inside the
+    polygon of the extreme points in eight directions are dropped first (Akl-Toussaint):
+    they cannot be hull vertices, so the hull is the same, and the chain's Python loop only
+    sees the few that remain (it was a quarter of the masks' time on real KITTI scans)."""
+    pts = np.asarray(points, dtype=np.float64)
+    return _monotone_chain(np.unique(_drop_interior(pts), axis=0))  # sorted by x, then y
+
+
+def _drop_interior(pts: np.ndarray) -> np.ndarray:
+    """``pts`` without those strictly inside the octagon of its extreme points (by a margin
+    far above rounding, so no point near the octagon's edges is dropped)."""
+    if len(pts) < _FILTER_MIN_POINTS or not np.isfinite(pts).all():
+        return pts
+    angles = np.arange(8) * (np.pi / 4)  # increasing angle: the extremes in hull order
+    directions = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    extremes = np.argmax(pts @ directions.T, axis=0)
+    order = list(dict.fromkeys(extremes.tolist()))  # consecutive directions may share one
+    if len(order) < 3:
+        return pts
+    a = pts[order]
+    b = np.roll(a, -1, axis=0)
+    edge = b - a
+    scale = float(np.abs(pts - pts.mean(axis=0)).max()) + 1.0
+    margin = 1e-9 * scale * scale
+    cross = edge[:, 0] * (pts[:, None, 1] - a[:, 1]) - edge[:, 1] * (pts[:, None, 0] - a[:, 0])
+    interior = (cross > margin).all(axis=1)
+    return pts[~interior]
+
+
+def _monotone_chain(pts: np.ndarray) -> np.ndarray:
+    """Hull of points sorted by x, then y, without duplicates."""
     if len(pts) < 3:
         return pts
 
