@@ -95,7 +95,6 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
     else
       ++frames_since_ba_start_;  // this frame is tracked against the map as it was
   }
-  const double wait_before_tracking_ms = finished_ba_.wait_ms;
   StageTimer timer(&result);
   frame.T_c_w = camera_tracker_.predicted_pose();
   bool tracked = false;
@@ -144,8 +143,11 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
     if (state_ == State::kTracking && !result.is_keyframe) camera_tracker_.update_velocity(frame);
     state_ = State::kTracking;
     KeyframeInsertion insertion;
+    double insertion_wait_ms = 0;
     if (!result.is_keyframe && local_mapper_.need_keyframe(frame, map_, reference_keyframe_)) {
+      const double waited_ms = finished_ba_.wait_ms;
       finish_local_ba();  // the map must not change under a pending BA
+      insertion_wait_ms = finished_ba_.wait_ms - waited_ms;
       const bool dynamic = track_objects && options_.local_ba.dynamic_objects;
       if (dynamic) object_tracker_.mark_keyframe(frame.index, options_.local_ba.window);
       insertion = local_mapper_.insert_keyframe(frame, map_, dynamic ? &object_tracker_ : nullptr);
@@ -154,7 +156,7 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
     }
     timer.lap("keyframe");
     // a wait for the previous BA before this insertion is reported apart (local_ba_wait)
-    result.timings_ms.back().second -= finished_ba_.wait_ms - wait_before_tracking_ms;
+    result.timings_ms.back().second -= insertion_wait_ms;
     if (insertion.ba_pending) {
       pending_keyframe_T_c_w_ = frame.T_c_w;
       frames_since_ba_start_ = 0;
