@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <system_error>
 #include <utility>
 
 #include "geometry/se3.hpp"
@@ -113,13 +114,17 @@ KeyframeInsertion LocalMapper::insert_keyframe(Frame& frame, map::Map& map, Obje
     if (prepare_local_ba(map, id, segment_first_keyframe_, ba_options_, weights_, objects, &pending->job)) {
       PendingBA* p = pending.get();
       // the thread reads only the job and copies of the camera and options
-      p->worker = std::thread([p, camera = camera_, options = ba_options_] {
-        try {
-          solve_local_ba(camera, options, &p->job);
-        } catch (...) {
-          p->error = std::current_exception();
-        }
-      });
+      try {
+        p->worker = std::thread([p, camera = camera_, options = ba_options_] {
+          try {
+            solve_local_ba(camera, options, &p->job);
+          } catch (...) {
+            p->error = std::current_exception();
+          }
+        });
+      } catch (const std::system_error&) {  // no thread to be had: solve it here
+        solve_local_ba(camera_, ba_options_, &p->job);
+      }
       pending_ = std::move(pending);
       insertion.ba_pending = true;
       return insertion;  // the map bound follows the BA (finish_bundle_adjustment)
