@@ -49,8 +49,8 @@ System::System(const geometry::StereoCamera& camera, const SlamOptions& options)
                       options.lidar_objects) {}
 
 void System::reset() {
-  local_mapper_.reset();
-  finished_ba_ = FinishedBundleAdjustment();  // drops a pending BA before the map it refers to
+  local_mapper_.reset();  // drops a pending BA before the map it refers to
+  finished_ba_ = FinishedBundleAdjustment();
   map_.clear();
   road_plane_ = objects::RoadPlaneEstimator();
   road_up_w_ = Vec3(0, -1, 0);

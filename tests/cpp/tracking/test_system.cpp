@@ -47,6 +47,18 @@ double rotation_error_deg(const Mat4& A, const Mat4& B) {
   return std::acos(std::clamp((dR.trace() - 1.0) / 2.0, -1.0, 1.0)) * 180.0 / M_PI;
 }
 
+// Mean translation error (m) of the refined trajectory's frame-to-frame steps against the
+// ground truth's.
+double mean_step_error(const std::vector<std::pair<tracking::TrajectoryEntry, Mat4>>& trajectory) {
+  double error = 0;
+  for (size_t i = 1; i < trajectory.size(); ++i) {
+    const Mat4 est = geometry::se3_inverse(trajectory[i - 1].second) * trajectory[i].second;
+    const Mat4 gt = geometry::se3_inverse(gt_pose(static_cast<int>(i) - 1)) * gt_pose(static_cast<int>(i));
+    error += translation_error(est, gt) / (trajectory.size() - 1);
+  }
+  return error;
+}
+
 struct StereoFrame {
   cv::Mat left, right, ids;  // ids: plane index of every left pixel
 };
@@ -95,12 +107,7 @@ TEST(TrackingSystem, TracksARenderedSequenceWithKnownMotion) {
   // The refined trajectory: every frame, each step close to the true step.
   const auto trajectory = system.trajectory();
   ASSERT_EQ(trajectory.size(), frames.size());
-  double step_error = 0;
-  for (size_t i = 1; i < trajectory.size(); ++i) {
-    const Mat4 est = geometry::se3_inverse(trajectory[i - 1].second) * trajectory[i].second;
-    const Mat4 gt = geometry::se3_inverse(gt_pose(static_cast<int>(i) - 1)) * gt_pose(static_cast<int>(i));
-    step_error += translation_error(est, gt) / (trajectory.size() - 1);
-  }
+  const double step_error = mean_step_error(trajectory);
   EXPECT_LT(step_error, 0.006);  // m per frame, of 0.25 m steps (seen: 2.5 mm)
 }
 
@@ -164,12 +171,7 @@ TEST(TrackingSystem, DelayedBundleAdjustmentOverlapsTheNextFrameAndStaysAccurate
   EXPECT_GE(reported, keyframes - 3);  // not the first keyframe's (none) nor the pending ones
   const auto trajectory = system.trajectory();  // applies the last one
   ASSERT_EQ(trajectory.size(), frames.size());
-  double step_error = 0;
-  for (size_t i = 1; i < trajectory.size(); ++i) {
-    const Mat4 est = geometry::se3_inverse(trajectory[i - 1].second) * trajectory[i].second;
-    const Mat4 gt = geometry::se3_inverse(gt_pose(static_cast<int>(i) - 1)) * gt_pose(static_cast<int>(i));
-    step_error += translation_error(est, gt) / (trajectory.size() - 1);
-  }
+  const double step_error = mean_step_error(trajectory);
   EXPECT_LT(step_error, 0.006);  // m per frame, as with the BA applied at once
 }
 
