@@ -26,7 +26,8 @@ GicpScan make_gicp_scan(const Eigen::Ref<const Points3>& points, int num_neighbo
   }
   scan.tree = KdTree(scan.points);
   if (static_cast<int>(scan.points.size()) >= num_neighbors) {
-    scan.normals = plane_normals(scan.points, scan.tree, num_neighbors, &scan.neighborhoods);
+    scan.normals = plane_normals(scan.points, scan.tree, num_neighbors, &scan.neighborhoods,
+                                 &scan.grid);
     scan.covariances.reserve(scan.normals.size());
     for (const Vec3& n : scan.normals) scan.covariances.push_back(plane_covariance(n));
   }
@@ -87,7 +88,8 @@ Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int
                          double* clearance_m) {
   *clearance_m = 0.0;
   const Neighborhoods& nb = scan.neighborhoods;
-  if (nb.size == 0) return scan.tree.nearest(q, max_d2, hint);
+  if (nb.size == 0 || scan.grid.empty()) return scan.tree.nearest(q, max_d2, hint);
+  double bound2 = std::numeric_limits<double>::infinity();  // a point seen is this near
   for (int hop = 0; hop < kMaxNeighborhoodHops && hint >= 0; ++hop) {
     const double rho2 = (scan.points[hint] - q).squaredNorm();
     const int* candidates = nb.indices.data() + static_cast<std::size_t>(hint) * nb.size;
@@ -113,10 +115,13 @@ Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int
                                        kClearanceSlackM);
       return best;
     }
+    bound2 = best2;
     if (best.index == hint) break;
     hint = best.index;  // closer to q: its neighbourhood may certify
   }
-  return scan.tree.nearest(q, max_d2, hint);
+  const Neighbor found = scan.grid.nearest(q, max_d2, bound2, clearance_m);
+  *clearance_m = std::max(0.0, *clearance_m - kClearanceSlackM);
+  return found;
 }
 
 Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int hint) {

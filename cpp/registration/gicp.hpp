@@ -10,6 +10,7 @@
 #include "geometry/types.hpp"
 #include "registration/kdtree.hpp"
 #include "registration/point_covariances.hpp"
+#include "registration/point_grid.hpp"
 
 namespace twistslam::registration {
 
@@ -20,6 +21,7 @@ struct GicpScan {
   std::vector<Mat3> covariances;  // empty when the scan has too few points
   std::vector<Vec3> normals;      // covariances[i] = plane_covariance(normals[i]); same size
   Neighborhoods neighborhoods;    // each point's num_neighbors nearest (correspondence search)
+  PointGrid grid;                 // the points by voxel (correspondences not found nearby)
   KdTree tree;
   int num_neighbors = 0;
   int num_dropped_non_finite = 0;  // NaN / Inf rows left out of `points`
@@ -37,7 +39,8 @@ GicpScan make_gicp_scan(const Eigen::Ref<const Points3>& points, int num_neighbo
 // scan.tree.nearest. With `hint` (e.g. q's neighbour at the previous GICP iteration; -1 =
 // none) at distance rho from q, the answer lies within 2 rho of the hint, so when that fits in
 // the hint's stored neighbourhood it is found there without the tree; else the closest point of
-// that neighbourhood becomes the hint (at most kMaxNeighborhoodHops tries), then the tree.
+// that neighbourhood becomes the hint (at most kMaxNeighborhoodHops tries), then the scan's
+// voxel grid within the nearest candidate seen (the tree when the scan has no grid).
 Neighbor nearest_in_scan(const GicpScan& scan, const Vec3& q, double max_d2, int hint);
 
 // Same, and in *clearance_m a lower bound (m) on the distance from q to every other point of

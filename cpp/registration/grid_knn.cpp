@@ -20,9 +20,6 @@ namespace {
 // within 10 % on the bench's real and simulated car scans (k = 20), 1.0 among the fastest.
 constexpr double kCellSizePerRadius = 1.0;
 constexpr double kCellSizeQuantile = 0.75;
-// At most this many cells per point (a far outlier would otherwise blow the grid up); the cell
-// grows instead. The bench's car scans have 0.1-3.9 cells per point (median 0.5-0.7).
-constexpr std::int64_t kMaxCellsPerPoint = 8;
 // Relative slack on the triangle-inequality reach (float rounding of r + |q - p|).
 constexpr float kReachSlack = 1.0001f;
 // Float coordinates (relative to the grid corner, a few m) are good to ~1e-6 m: the searched
@@ -94,7 +91,7 @@ void select_smallest(std::uint64_t* keys, int n, int k, std::uint64_t guess) {
 }  // namespace
 
 void all_knn(const std::vector<Vec3>& points, const KdTree& tree, int k, Neighborhoods* out,
-             GridKnnStats* stats) {
+             GridKnnStats* stats, PointGrid* grid_out) {
   const int n = static_cast<int>(points.size());
   if (k < 1 || k > n || tree.size() != n)
     throw std::invalid_argument("all_knn: need 1 <= k <= points.size() == tree.size()");
@@ -114,45 +111,22 @@ void all_knn(const std::vector<Vec3>& points, const KdTree& tree, int k, Neighbo
                                            kCellSizeQuantile * (sampled_r2.size() - 1));
   std::nth_element(sampled_r2.begin(), quantile, sampled_r2.end());
   // Coincident points (radius 0) still need a positive cell (1 mm: below any LiDAR spacing).
-  double cell = std::max(kCellSizePerRadius * std::sqrt(*quantile), 1e-3);
-
-  Vec3 origin = points[0], hi = points[0];
-  for (const Vec3& p : points) {
-    origin = origin.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  Eigen::Vector3i dims;
-  for (;;) {
-    for (int a = 0; a < 3; ++a) dims[a] = static_cast<int>((hi[a] - origin[a]) / cell) + 1;
-    if (std::int64_t{dims[0]} * dims[1] * dims[2] <= kMaxCellsPerPoint * n) break;
-    cell *= 1.26;  // ~2x fewer cells per round
-  }
+  PointGrid grid = make_point_grid(points, std::max(kCellSizePerRadius * std::sqrt(*quantile), 1e-3));
+  const double cell = grid.cell_m;
   const float cell_f = static_cast<float>(cell);
+  const int* dims = grid.dims;
   const int nx = dims[0], nxy = dims[0] * dims[1];
-  const int num_cells = nxy * dims[2];
-
-  // Counting sort of the points by cell; float coordinates relative to the grid's corner.
-  std::vector<int> cell_of(n), start(num_cells + 1, 0);
-  for (int i = 0; i < n; ++i) {
-    int c[3];
-    for (int a = 0; a < 3; ++a)
-      c[a] = std::min(static_cast<int>((points[i][a] - origin[a]) / cell), dims[a] - 1);
-    cell_of[i] = c[0] + nx * c[1] + nxy * c[2];
-    ++start[cell_of[i] + 1];
-  }
-  for (int c = 0; c < num_cells; ++c) start[c + 1] += start[c];
+  const int num_cells = grid.num_cells();
+  const std::vector<int>& start = grid.start;
+  const std::vector<int>& sorted = grid.index;
+  // float coordinates relative to the grid's corner
   std::vector<float> xs(n), ys(n), zs(n);
-  std::vector<int> sorted(n);
-  {
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (int i = 0; i < n; ++i) {
-      const int s = fill[cell_of[i]]++;
-      sorted[s] = i;
-      xs[s] = static_cast<float>(points[i][0] - origin[0]);
-      ys[s] = static_cast<float>(points[i][1] - origin[1]);
-      zs[s] = static_cast<float>(points[i][2] - origin[2]);
-    }
+  for (int s = 0; s < n; ++s) {
+    xs[s] = static_cast<float>(grid.points[s][0] - grid.origin[0]);
+    ys[s] = static_cast<float>(grid.points[s][1] - grid.origin[1]);
+    zs[s] = static_cast<float>(grid.points[s][2] - grid.origin[2]);
   }
+  const Vec3& origin = grid.origin;
 
   // (float bits of d2) << 32 | index: positive floats order like their bits, so one integer
   // comparison ranks by distance (ties by index) in nth_element.
@@ -247,6 +221,7 @@ void all_knn(const std::vector<Vec3>& points, const KdTree& tree, int k, Neighbo
     px = qx, py = qy, pz = qz;
   }
   if (stats != nullptr) *stats = GridKnnStats{cell, num_cells, retries};
+  if (grid_out != nullptr) *grid_out = std::move(grid);
 }
 
 }  // namespace twistslam::registration

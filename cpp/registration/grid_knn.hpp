@@ -12,6 +12,7 @@
 
 #include "geometry/types.hpp"
 #include "registration/kdtree.hpp"
+#include "registration/point_grid.hpp"
 
 namespace twistslam::registration {
 
@@ -33,10 +34,10 @@ struct GridKnnStats {
 
 // Fills `out` with the k nearest neighbours of every point of `points` (finite; k <=
 // points.size()); `tree` was built from `points` (its leaf order and a few queries that size
-// the cells). Throws
-// std::invalid_argument unless 1 <= k <= points.size() == tree.size().
+// the cells). With `grid`, the grid is handed over there. Throws std::invalid_argument unless
+// 1 <= k <= points.size() == tree.size().
 void all_knn(const std::vector<Vec3>& points, const KdTree& tree, int k, Neighborhoods* out,
-             GridKnnStats* stats = nullptr);
+             GridKnnStats* stats = nullptr, PointGrid* grid = nullptr);
 
 // Sampled points per scan whose KD-tree k-th distance sets the grid's cell size (16 queries:
 // ~5 % of the k-NN time of a 400-point scan).

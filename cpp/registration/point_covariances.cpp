@@ -47,14 +47,15 @@ Vec3 smallest_eigenvector(const Mat3& A) {
 }  // namespace
 
 std::vector<Vec3> plane_normals(const std::vector<Vec3>& points, const KdTree& tree,
-                                int num_neighbors, Neighborhoods* neighborhoods) {
+                                int num_neighbors, Neighborhoods* neighborhoods,
+                                PointGrid* grid) {
   if (num_neighbors < 3 || tree.size() < num_neighbors)
     throw std::invalid_argument("plane_covariances: need num_neighbors >= 3 and at least "
                                 "num_neighbors points");
   std::vector<Vec3> normals(points.size());
   Neighborhoods local;
   Neighborhoods* nb = neighborhoods != nullptr ? neighborhoods : &local;
-  all_knn(points, tree, num_neighbors, nb);
+  all_knn(points, tree, num_neighbors, nb, nullptr, grid);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const int* neighbors = nb->indices.data() + i * num_neighbors;
     // One pass over the neighbours, relative to the point itself (their spread is a few cm, so

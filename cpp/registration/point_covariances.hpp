@@ -21,9 +21,10 @@ inline constexpr double kPlaneEpsilon = 1e-3;
 // normal. With `neighborhoods`, also each point's neighbours: their indices (unordered), at
 // [i * num_neighbors, (i + 1) * num_neighbors) of `indices`, and the squared distance to the
 // farthest of them in `radius2_m2` (the k-NN search finds them anyway). The neighbours come from
-// all_knn (grid_knn.hpp): the KD-tree's k-NN up to ties.
+// all_knn (grid_knn.hpp): the KD-tree's k-NN up to ties; with `grid`, its voxel grid is kept.
 std::vector<Vec3> plane_normals(const std::vector<Vec3>& points, const KdTree& tree,
-                                int num_neighbors, Neighborhoods* neighborhoods = nullptr);
+                                int num_neighbors, Neighborhoods* neighborhoods = nullptr,
+                                PointGrid* grid = nullptr);
 
 // The plane covariance of a unit normal n: V diag(eps, 1, 1) V^T = I - (1 - eps) n n^T (V
 // orthonormal with n its first column), so a normal is all GICP needs to store per point.
