@@ -9,6 +9,71 @@
 
 namespace twistslam::features {
 
+namespace {
+
+constexpr int kMaxWindowPixels = (2 * kMaxSadHalfWidth + 1) * (2 * kMaxSadHalfHeight + 1);
+
+// The left window's supported pixels as (row, column) offsets.
+struct SupportPixels {
+  std::array<std::uint8_t, kMaxWindowPixels> row, col;
+  int count = 0;
+};
+
+SupportPixels support_pixels(int rows, int cols, const std::uint8_t* support) {
+  SupportPixels s;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      if (support[r * cols + c]) {
+        s.row[s.count] = static_cast<std::uint8_t>(r);
+        s.col[s.count] = static_cast<std::uint8_t>(c);
+        ++s.count;
+      }
+  return s;
+}
+
+// The left window around (xl, y) into `left` (rows x cols floats), minus the mean of its
+// supported pixels; returns their contrast (sum of absolute deviations).
+float supported_left(const cv::Mat& L, int xl, int y, int half_width, int half_height,
+                     const SupportPixels& used, float* left) {
+  const int cols = 2 * half_width + 1, rows = 2 * half_height + 1;
+  for (int r = 0; r < rows; ++r) {
+    const std::uint8_t* p = L.ptr<std::uint8_t>(y - half_height + r) + xl - half_width;
+    for (int c = 0; c < cols; ++c) left[r * cols + c] = p[c];
+  }
+  float sum = 0;
+  for (int k = 0; k < used.count; ++k) sum += left[used.row[k] * cols + used.col[k]];
+  const float mean = sum / static_cast<float>(used.count);
+  float contrast = 0;
+  for (int k = 0; k < rows * cols; ++k) left[k] -= mean;
+  for (int k = 0; k < used.count; ++k) contrast += std::abs(left[used.row[k] * cols + used.col[k]]);
+  return contrast;
+}
+
+// Zero-mean SAD over the supported pixels of the left window (`left`, its mean removed) against
+// the right band (rows of `span` floats) at every offset d in [0, num): cost[d]. Two passes
+// over the pixels, each a contiguous loop over d: the right windows' means over the same
+// pixels, then the absolute differences.
+void supported_costs(const float* left, const SupportPixels& used, int cols, const float* band,
+                     int span, int num, float* cost) {
+  if (num <= 0) return;
+  thread_local std::vector<float> mean_right;
+  mean_right.assign(num, 0.0f);
+  for (int k = 0; k < used.count; ++k) {
+    const float* b = band + static_cast<size_t>(used.row[k]) * span + used.col[k];
+    for (int d = 0; d < num; ++d) mean_right[d] += b[d];
+  }
+  const float inv = 1.0f / static_cast<float>(used.count);
+  for (int d = 0; d < num; ++d) mean_right[d] *= inv;
+  std::fill(cost, cost + num, 0.0f);
+  for (int k = 0; k < used.count; ++k) {
+    const float l = left[used.row[k] * cols + used.col[k]];
+    const float* b = band + static_cast<size_t>(used.row[k]) * span + used.col[k];
+    for (int d = 0; d < num; ++d) cost[d] += std::abs(l - (b[d] - mean_right[d]));
+  }
+}
+
+}  // namespace
+
 float vertex_offset(float cm, float c0, float cp) {
   const float rise = std::max(cm, cp) - c0;
   if (!(rise > 0)) return 0.0f;
@@ -16,7 +81,7 @@ float vertex_offset(float cm, float c0, float cp) {
 }
 
 SadRefined refine_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int xr0, float dy,
-                      int half_width, int half_height, int range) {
+                      int half_width, int half_height, int range, const std::uint8_t* support) {
   SadRefined out;
   const int cols = 2 * half_width + 1, rows = 2 * half_height + 1, n = cols * rows;
   const int span = 2 * range + cols, x_begin = xr0 - range - half_width;
@@ -28,21 +93,7 @@ SadRefined refine_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int xr0
       y0 + rows >= R.rows)
     return out;
 
-  std::array<float, (2 * kMaxSadHalfWidth + 1) * (2 * kMaxSadHalfHeight + 1)> left;
-  float sum_left = 0;
-  for (int r = 0; r < rows; ++r) {
-    const std::uint8_t* p = L.ptr<std::uint8_t>(y - half_height + r) + xl - half_width;
-    for (int c = 0; c < cols; ++c) {
-      left[r * cols + c] = p[c];
-      sum_left += p[c];
-    }
-  }
-  const float mean_left = sum_left / n;
-  float contrast = 0;
-  for (int k = 0; k < n; ++k) {
-    left[k] -= mean_left;
-    contrast += std::abs(left[k]);
-  }
+  std::array<float, kMaxWindowPixels> left;
   // Right band, rows interpolated at the predicted offset; column sums give window means.
   std::array<float, (2 * kMaxSadRange + 2 * kMaxSadHalfWidth + 1) * (2 * kMaxSadHalfHeight + 1)> band;
   std::array<float, 2 * kMaxSadRange + 2 * kMaxSadHalfWidth + 1> column{};
@@ -56,19 +107,42 @@ SadRefined refine_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int xr0
     }
   }
   std::array<float, 2 * kMaxSadRange + 1> cost;
+  float contrast = 0;
   int best = 0;
-  for (int d = 0; d <= 2 * range; ++d) {
-    float sum_right = 0;
-    for (int c = 0; c < cols; ++c) sum_right += column[d + c];
-    const float mean_right = sum_right / n;
-    float sad = 0;
+  if (support != nullptr) {
+    const SupportPixels used = support_pixels(rows, cols, support);
+    if (used.count == 0) return out;
+    contrast = supported_left(L, xl, y, half_width, half_height, used, left.data());
+    supported_costs(left.data(), used, cols, band.data(), span, 2 * range + 1, cost.data());
+    for (int d = 1; d <= 2 * range; ++d)
+      if (cost[d] < cost[best]) best = d;
+  } else {
+    float sum_left = 0;
     for (int r = 0; r < rows; ++r) {
-      const float* b = band.data() + r * span + d;
-      const float* l = left.data() + r * cols;
-      for (int c = 0; c < cols; ++c) sad += std::abs(l[c] - (b[c] - mean_right));
+      const std::uint8_t* p = L.ptr<std::uint8_t>(y - half_height + r) + xl - half_width;
+      for (int c = 0; c < cols; ++c) {
+        left[r * cols + c] = p[c];
+        sum_left += p[c];
+      }
     }
-    cost[d] = sad;
-    if (sad < cost[best]) best = d;
+    const float mean_left = sum_left / n;
+    for (int k = 0; k < n; ++k) {
+      left[k] -= mean_left;
+      contrast += std::abs(left[k]);
+    }
+    for (int d = 0; d <= 2 * range; ++d) {
+      float sum_right = 0;
+      for (int c = 0; c < cols; ++c) sum_right += column[d + c];
+      const float mean_right = sum_right / n;
+      float sad = 0;
+      for (int r = 0; r < rows; ++r) {
+        const float* b = band.data() + r * span + d;
+        const float* l = left.data() + r * cols;
+        for (int c = 0; c < cols; ++c) sad += std::abs(l[c] - (b[c] - mean_right));
+      }
+      cost[d] = sad;
+      if (sad < cost[best]) best = d;
+    }
   }
   if (best == 0 || best == 2 * range) return out;  // minimum on the border: no true minimum
   const float delta = vertex_offset(cost[best - 1], cost[best], cost[best + 1]);
@@ -79,7 +153,7 @@ SadRefined refine_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int xr0
 }
 
 SadScan scan_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int x_first, int x_last,
-                 int half_width, int half_height) {
+                 int half_width, int half_height, const std::uint8_t* support) {
   SadScan out;
   out.second_cost = std::numeric_limits<float>::infinity();
   const int cols = 2 * half_width + 1, rows = 2 * half_height + 1, n = cols * rows;
@@ -89,16 +163,6 @@ SadScan scan_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int x_first,
   x_first = std::max(x_first, half_width);
   x_last = std::min(x_last, R.cols - 1 - half_width);
   if (x_first > x_last) return out;
-
-  std::array<float, (2 * kMaxSadHalfWidth + 1) * (2 * kMaxSadHalfHeight + 1)> left;
-  float sum_left = 0;
-  for (int r = 0; r < rows; ++r) {
-    const std::uint8_t* p = L.ptr<std::uint8_t>(y - half_height + r) + xl - half_width;
-    for (int c = 0; c < cols; ++c) sum_left += left[r * cols + c] = p[c];
-  }
-  const float mean_left = sum_left / n;
-  float contrast = 0;
-  for (int k = 0; k < n; ++k) contrast += std::abs(left[k] -= mean_left);
 
   // The right band as floats once, and each window's mean from the column sums. The cost
   // then accumulates one left pixel at a time over every disparity: a contiguous loop over
@@ -114,20 +178,36 @@ SadScan scan_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int x_first,
     float* b = band.data() + static_cast<size_t>(r) * span;
     for (int c = 0; c < span; ++c) column[c] += b[c] = p[c];
   }
-  mean_right.resize(num_columns);
-  for (int d = 0; d < num_columns; ++d) {
-    float sum_right = 0;
-    for (int c = 0; c < cols; ++c) sum_right += column[d + c];
-    mean_right[d] = sum_right / n;
-  }
+  std::array<float, kMaxWindowPixels> left;
+  float contrast = 0;
   cost.assign(num_columns, 0.0f);
-  float* __restrict const cost_d = cost.data();
-  const float* __restrict const mean_d = mean_right.data();
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < cols; ++c) {
-      const float l = left[r * cols + c];
-      const float* b = band.data() + static_cast<size_t>(r) * span + c;
-      for (int d = 0; d < num_columns; ++d) cost_d[d] += std::abs(l - (b[d] - mean_d[d]));
+  if (support != nullptr) {
+    const SupportPixels used = support_pixels(rows, cols, support);
+    if (used.count == 0) return out;
+    contrast = supported_left(L, xl, y, half_width, half_height, used, left.data());
+    supported_costs(left.data(), used, cols, band.data(), span, num_columns, cost.data());
+  } else {
+    float sum_left = 0;
+    for (int r = 0; r < rows; ++r) {
+      const std::uint8_t* p = L.ptr<std::uint8_t>(y - half_height + r) + xl - half_width;
+      for (int c = 0; c < cols; ++c) sum_left += left[r * cols + c] = p[c];
+    }
+    const float mean_left = sum_left / n;
+    for (int k = 0; k < n; ++k) contrast += std::abs(left[k] -= mean_left);
+    mean_right.resize(num_columns);
+    for (int d = 0; d < num_columns; ++d) {
+      float sum_right = 0;
+      for (int c = 0; c < cols; ++c) sum_right += column[d + c];
+      mean_right[d] = sum_right / n;
+    }
+    float* __restrict const cost_d = cost.data();
+    const float* __restrict const mean_d = mean_right.data();
+    for (int r = 0; r < rows; ++r) {
+      for (int c = 0; c < cols; ++c) {
+        const float l = left[r * cols + c];
+        const float* b = band.data() + static_cast<size_t>(r) * span + c;
+        for (int d = 0; d < num_columns; ++d) cost_d[d] += std::abs(l - (b[d] - mean_d[d]));
+      }
     }
   }
   int best = 0;

@@ -2,8 +2,14 @@
 // Zero-mean SAD block matching along a rectified row, shared by the descriptor-guided stereo
 // matcher (stereo.cpp: sub-pixel refinement around a descriptor match) and the descriptor-free
 // search of object keypoints (stereo_search.cpp: a scan over the whole disparity range).
-// Windows are (2 half_width + 1) x (2 half_height + 1) level pixels.
+// Windows are (2 half_width + 1) x (2 half_height + 1) level pixels. Both take an optional
+// support: which pixels of the left window (row-major, 1 = used) belong to the keypoint's
+// object. The zero-mean SAD is then summed over those pixels only (window means included): a
+// window on an object's edge otherwise also matches the background, whose texture can outweigh
+// the object's (a pedestrian beside a tree trunk took the trunk's disparity).
 #include <opencv2/core.hpp>
+
+#include <cstdint>
 
 namespace twistslam::features {
 
@@ -26,7 +32,8 @@ struct SadRefined {
 // The minimum must lie strictly inside the range; a V fit through it and its neighbours gives
 // the sub-pixel column. Not ok where a window leaves an image.
 SadRefined refine_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int xr0, float dy,
-                      int half_width, int half_height, int range);
+                      int half_width, int half_height, int range,
+                      const std::uint8_t* support = nullptr);
 
 struct SadScan {
   int best_column = -1;     // right level column of the smallest cost (-1: no window fits)
@@ -39,6 +46,6 @@ struct SadScan {
 // refine_sad adds the sub-pixel column and the row offset). Columns whose window leaves the
 // right image are skipped.
 SadScan scan_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int x_first, int x_last,
-                 int half_width, int half_height);
+                 int half_width, int half_height, const std::uint8_t* support = nullptr);
 
 }  // namespace twistslam::features

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "features/disparity_window.hpp"
 #include "features/sad.hpp"
@@ -52,54 +54,132 @@ void check_arguments(const char* who, const Keypoints& left, const std::vector<c
 
 }  // namespace
 
+namespace {
+
+// The scan's geometry, fixed per frame.
+struct ScanSetup {
+  cv::Size size0;
+  DisparityWindow window;
+  double fb = 0;      // depth = fb / (disparity + offset)
+  float offset = 0;
+};
+
+ScanSetup scan_setup(const std::vector<cv::Mat>& pyramid_left, const geometry::StereoCamera& camera,
+                     const StereoSearchOptions& options) {
+  return {pyramid_left[0].size(), disparity_window(camera, options.min_depth, options.max_depth),
+          camera.fx * camera.baseline, static_cast<float>(camera.disparity_offset)};
+}
+
+// The depth of one left keypoint by a SAD scan over the disparity range on its level, refined
+// to sub-pixel (with `support`: on the supported window pixels only); false when rejected.
+bool scan_depth(const cv::KeyPoint& kl, const cv::Mat& L, const cv::Mat& R, const ScanSetup& g,
+                const StereoSearchOptions& options, const std::uint8_t* support, float* u_right,
+                float* depth) {
+  // sub-pixel refinement around the scan's integer minimum: +-2 level px
+  constexpr int kRefineRange = 2;
+  const float scale = static_cast<float>(g.size0.width) / L.cols;
+  const cv::Point2f pl = image_to_level(kl.pt, g.size0, L.size());
+  const int xl = cvRound(pl.x), y = cvRound(pl.y);
+  // right columns (level px) of the disparity range
+  const int x_first = static_cast<int>(std::floor(pl.x - g.window.max_disparity / scale));
+  const int x_last = static_cast<int>(std::ceil(pl.x - g.window.min_disparity / scale));
+  const SadScan scan = scan_sad(L, R, xl, y, x_first, x_last, options.patch_radius,
+                                options.patch_half_height, support);
+  if (scan.best_column < 0 || !(scan.best_cost <= options.max_cost) ||
+      !(scan.best_cost < options.uniqueness * scan.second_cost))
+    return false;
+  const float level_sy = static_cast<float>(g.size0.height) / L.rows;
+  // the right row drifts with disparity (KITTI)
+  const float dy = g.window.dv_per_disparity * (pl.x - scan.best_column) * scale / level_sy;
+  const SadRefined ref = refine_sad(L, R, xl, y, scan.best_column, dy, options.patch_radius,
+                                    options.patch_half_height, kRefineRange, support);
+  if (!ref.ok) return false;
+  const float u_level = ref.u_level + (pl.x - static_cast<float>(xl));
+  const float u = (u_level + 0.5f) * scale - 0.5f;
+  const float disparity = kl.pt.x - u;
+  if (!(disparity >= g.window.min_disparity && disparity <= g.window.max_disparity)) return false;
+  *u_right = u;
+  *depth = static_cast<float>(g.fb / (disparity + g.offset));
+  return true;
+}
+
+}  // namespace
+
 int search_stereo(const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
                   const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
                   const StereoSearchOptions& options, const std::vector<int>& which,
                   StereoMatches* matches) {
   check_arguments("search_stereo", left, pyramid_left, pyramid_right, camera, options, which, *matches);
-  const cv::Size size0 = pyramid_left[0].size();
-  const DisparityWindow window = disparity_window(camera, options.min_depth, options.max_depth);
-  const double fb = camera.fx * camera.baseline;  // depth = fb / (disparity + offset)
-  const float offset = static_cast<float>(camera.disparity_offset);
-  const float min_disparity = window.min_disparity, max_disparity = window.max_disparity;
-  const float dv_per_disparity = window.dv_per_disparity;  // the right row drifts (KITTI)
-  // sub-pixel refinement around the scan's integer minimum: +-2 level px
-  constexpr int kRefineRange = 2;
-
+  const ScanSetup setup = scan_setup(pyramid_left, camera, options);
   std::atomic<int> found{0};
   auto search_range = [&](const cv::Range& range) {
     for (int j = range.start; j < range.end; ++j) {
       const int i = which[j];
       const cv::KeyPoint& kl = left.keypoints[i];
-      const cv::Mat& L = pyramid_left[kl.octave];
-      const cv::Mat& R = pyramid_right[kl.octave];
-      const float scale = static_cast<float>(size0.width) / L.cols;
-      const cv::Point2f pl = image_to_level(kl.pt, size0, L.size());
-      const int xl = cvRound(pl.x), y = cvRound(pl.y);
-      // right columns (level px) of the disparity range
-      const int x_first = static_cast<int>(std::floor(pl.x - max_disparity / scale));
-      const int x_last = static_cast<int>(std::ceil(pl.x - min_disparity / scale));
-      const SadScan scan = scan_sad(L, R, xl, y, x_first, x_last, options.patch_radius,
-                                    options.patch_half_height);
-      if (scan.best_column < 0 || !(scan.best_cost <= options.max_cost) ||
-          !(scan.best_cost < options.uniqueness * scan.second_cost))
-        continue;
-      const float level_sy = static_cast<float>(size0.height) / L.rows;
-      const float dy = dv_per_disparity * (pl.x - scan.best_column) * scale / level_sy;
-      const SadRefined ref = refine_sad(L, R, xl, y, scan.best_column, dy, options.patch_radius,
-                                        options.patch_half_height, kRefineRange);
-      if (!ref.ok) continue;
-      const float u_level = ref.u_level + (pl.x - static_cast<float>(xl));
-      const float u_right = (u_level + 0.5f) * scale - 0.5f;
-      const float disparity = kl.pt.x - u_right;
-      if (!(disparity >= min_disparity && disparity <= max_disparity)) continue;
-      matches->u_right[i] = u_right;
-      matches->depth[i] = static_cast<float>(fb / (disparity + offset));
-      ++found;
+      if (scan_depth(kl, pyramid_left[kl.octave], pyramid_right[kl.octave], setup, options, nullptr,
+                     &matches->u_right[i], &matches->depth[i]))
+        ++found;
     }
   };
   cv::parallel_for_(cv::Range(0, static_cast<int>(which.size())), search_range, 2.0);
   return found.load();
+}
+
+InstanceSupportReport depth_on_instance_pixels(
+    const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
+    const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
+    const StereoSearchOptions& options, const std::vector<int>& which, const cv::Mat& instances,
+    float min_support_fraction, StereoMatches* matches) {
+  check_arguments("depth_on_instance_pixels", left, pyramid_left, pyramid_right, camera, options,
+                  which, *matches);
+  if (instances.type() != CV_32SC1 || instances.size() != pyramid_left[0].size())
+    throw std::invalid_argument("depth_on_instance_pixels: instances must be int32 ids of the "
+                                "level-0 image's size");
+  if (!(min_support_fraction >= 0.0f && min_support_fraction <= 1.0f))
+    throw std::invalid_argument("depth_on_instance_pixels: min_support_fraction must be in [0, 1]");
+  const ScanSetup setup = scan_setup(pyramid_left, camera, options);
+  const int cols = 2 * options.patch_radius + 1, rows = 2 * options.patch_half_height + 1;
+  std::atomic<int> rescanned{0}, dropped{0};
+  auto range_body = [&](const cv::Range& range) {
+    std::vector<std::uint8_t> support(static_cast<size_t>(rows) * cols);
+    for (int j = range.start; j < range.end; ++j) {
+      const int i = which[j];
+      if (!(matches->depth[i] > 0)) continue;
+      const cv::KeyPoint& kl = left.keypoints[i];
+      const int u0 = static_cast<int>(std::lround(kl.pt.x)), v0 = static_cast<int>(std::lround(kl.pt.y));
+      if (u0 < 0 || v0 < 0 || u0 >= instances.cols || v0 >= instances.rows) continue;
+      const int id = instances.at<int>(v0, u0);
+      if (id <= 0) continue;
+      const cv::Mat& L = pyramid_left[kl.octave];
+      const cv::Point2f pl = image_to_level(kl.pt, setup.size0, L.size());
+      const int xl = cvRound(pl.x), y = cvRound(pl.y);
+      int count = 0;
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) {
+          // the window pixel's centre in the level-0 image (its instance there)
+          const cv::Point2f p0 = level_to_image(
+              cv::Point2f(static_cast<float>(xl - options.patch_radius + c),
+                          static_cast<float>(y - options.patch_half_height + r)),
+              setup.size0, L.size());
+          const int u = std::clamp(static_cast<int>(std::lround(p0.x)), 0, instances.cols - 1);
+          const int v = std::clamp(static_cast<int>(std::lround(p0.y)), 0, instances.rows - 1);
+          const bool own = instances.at<int>(v, u) == id;
+          support[static_cast<size_t>(r) * cols + c] = own;
+          count += own;
+        }
+      if (count == rows * cols) continue;  // the window lies on the object: its depth stands
+      if (count < min_support_fraction * static_cast<float>(rows * cols)) continue;
+      ++rescanned;
+      if (!scan_depth(kl, L, pyramid_right[kl.octave], setup, options, support.data(),
+                      &matches->u_right[i], &matches->depth[i])) {
+        matches->u_right[i] = -1.0f;
+        matches->depth[i] = -1.0f;
+        ++dropped;
+      }
+    }
+  };
+  cv::parallel_for_(cv::Range(0, static_cast<int>(which.size())), range_body, 2.0);
+  return {rescanned.load(), dropped.load()};
 }
 
 int check_left_right(const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,

@@ -46,7 +46,8 @@ FrameBuilder::FrameBuilder(const geometry::StereoCamera& camera, const SlamOptio
 FrameBuildReport FrameBuilder::build(int index, double timestamp, const cv::Mat& left,
                                      const cv::Mat& right, const cv::Mat& labels,
                                      const Points3& points_c, Frame* out_frame,
-                                     const cv::Mat& object_mask, const cv::Mat& instances) const {
+                                     const cv::Mat& object_mask, const cv::Mat& instances,
+                                     const cv::Mat& support_instances) const {
   check_image(left, "image_left", camera_);
   check_image(right, "image_right", camera_);
   if (left.size() != right.size()) throw std::invalid_argument("image_right: size differs from image_left");
@@ -67,7 +68,7 @@ FrameBuildReport FrameBuilder::build(int index, double timestamp, const cv::Mat&
   if (object_keypoints_ && !object_mask.empty()) {
     const auto start = std::chrono::steady_clock::now();
     out.object_keypoints = object_keypoints_->extract(gray_left, object_mask, camera_, &stereo_features,
-                                                       instances);
+                                                       instances, support_instances);
     out.timings_ms.emplace_back(
         "object_keypoints",
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());

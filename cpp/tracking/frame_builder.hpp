@@ -34,12 +34,14 @@ class FrameBuilder {
   // or CV_8UC1, non-zero on object instances (object_class_mask): extra keypoints are
   // extracted there when visual_objects.extra_keypoints (never usable for the camera).
   // instances: empty or the CV_32SC1 instance ids the mask came from (a second pass on the
-  // masks left with few keypoints, ObjectKeypointExtractor::extract).
+  // masks left with few keypoints, ObjectKeypointExtractor::extract); support_instances: empty
+  // or the ids of every object instance (their own pixels give their edge keypoints' depth).
   // Throws std::invalid_argument on bad sizes or types.
   FrameBuildReport build(int index, double timestamp, const cv::Mat& left, const cv::Mat& right,
                          const cv::Mat& labels, const Points3& points_c, Frame* frame,
                          const cv::Mat& object_mask = cv::Mat(),
-                         const cv::Mat& instances = cv::Mat()) const;
+                         const cv::Mat& instances = cv::Mat(),
+                         const cv::Mat& support_instances = cv::Mat()) const;
 
   const features::OrbExtractor& extractor() const { return extractor_; }
 

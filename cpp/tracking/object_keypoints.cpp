@@ -142,7 +142,9 @@ ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& mai
       min_instance_area_px_(options.extra_min_instance_area_px),
       min_spacing_px_(options.extra_min_spacing_px),
       left_right_check_(options.left_right_check),
-      left_right_tolerance_px_(static_cast<float>(options.left_right_tolerance_px)) {
+      left_right_tolerance_px_(static_cast<float>(options.left_right_tolerance_px)),
+      instance_pixel_stereo_(options.instance_pixel_stereo),
+      instance_pixel_min_fraction_(static_cast<float>(options.instance_pixel_min_fraction)) {
   search_.min_depth = static_cast<float>(options.extra_min_depth_m);
   search_.max_depth = static_cast<float>(options.max_depth_m);
   search_.max_cost = static_cast<float>(options.extra_max_sad_cost);
@@ -154,7 +156,8 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
                                                       const cv::Mat& object_mask,
                                                       const geometry::StereoCamera& camera,
                                                       features::StereoFeatures* f,
-                                                      const cv::Mat& instances) const {
+                                                      const cv::Mat& instances,
+                                                      const cv::Mat& support_instances) const {
   ObjectKeypointReport report;
   if (object_mask.empty() || cv::countNonZero(object_mask) == 0) return report;
   features::Keypoints& left = f->left;
@@ -217,6 +220,13 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
     throw std::invalid_argument("ObjectKeypointExtractor: the right pyramid was not kept");
   report.num_new_depth = features::search_stereo(left, pyr_left, f->right.pyramid, camera, search_,
                                                  without_depth, &f->matches);
+  if (instance_pixel_stereo_ && !support_instances.empty()) {
+    const features::InstanceSupportReport support = features::depth_on_instance_pixels(
+        left, pyr_left, f->right.pyramid, camera, search_, on_objects, support_instances,
+        instance_pixel_min_fraction_, &f->matches);
+    report.num_instance_rescanned = support.num_rescanned;
+    report.num_instance_dropped = support.num_dropped;
+  }
   if (left_right_check_)
     report.num_left_right_removed =
         features::check_left_right(left, pyr_left, f->right.pyramid, camera, search_, on_objects,

@@ -22,6 +22,8 @@ struct ObjectKeypointReport {
   int num_deprived = 0;   // instances that got a second pass on their own mask
   int num_new_depth = 0;  // object keypoints (new or old) that the SAD scan gave a depth
   int num_left_right_removed = 0;  // object keypoints whose depth failed the left-right check
+  int num_instance_rescanned = 0;  // edge keypoints whose depth was searched on their instance
+  int num_instance_dropped = 0;    // ... and found none there
 };
 
 // CV_8UC1 mask, 255 on pixels of an instance (instances > 0) whose class (labels; any class
@@ -41,8 +43,11 @@ class ObjectKeypointExtractor {
 
   // Appends to features->left (keypoints, descriptors) and features->matches the object
   // keypoints farther than min spacing from every existing left keypoint, then searches the
-  // depth of every object keypoint that has none; with the left-right check, every object
-  // keypoint's depth is then checked back from the right image. Needs the left and right
+  // depth of every object keypoint that has none; with instances and instance_pixel_stereo, an
+  // object keypoint whose SAD window also covers other pixels is matched again on its
+  // instance's pixels only (support_instances: the ids of every object instance, CV_32SC1 of
+  // the image size; empty: off); with the left-right check, every object keypoint's depth is then
+  // checked back from the right image. Needs the left and right
   // pyramids of extract_and_match. Keypoints at index >= the old size are the new ones.
   // instances (empty, or CV_32SC1 ids of the image size; <= 0: none): an instance whose mask
   // then holds fewer than extra_min_instance_keypoints keypoints gets a second pass on its own
@@ -50,7 +55,8 @@ class ObjectKeypointExtractor {
   ObjectKeypointReport extract(const cv::Mat& gray_left, const cv::Mat& object_mask,
                                const geometry::StereoCamera& camera,
                                features::StereoFeatures* features,
-                               const cv::Mat& instances = cv::Mat()) const;
+                               const cv::Mat& instances = cv::Mat(),
+                               const cv::Mat& support_instances = cv::Mat()) const;
 
  private:
   features::OrbExtractor extractor_;
@@ -60,6 +66,8 @@ class ObjectKeypointExtractor {
   double min_spacing_px_;
   bool left_right_check_;
   float left_right_tolerance_px_;
+  bool instance_pixel_stereo_;
+  float instance_pixel_min_fraction_;
 };
 
 }  // namespace twistslam::tracking

@@ -93,6 +93,12 @@ struct ObjectTrackingOptions {
   // left-right check of every object keypoint's stereo match (features::check_left_right)
   bool left_right_check = true;
   double left_right_tolerance_px = 2.0;  // level px between the match and its way back
+  // object keypoints on the edge of an instance of these classes (people: thinner than the SAD
+  // window) get their depth from its own pixels (features::depth_on_instance_pixels), with at
+  // least this share of the window on them
+  bool instance_pixel_stereo = true;
+  std::vector<int> instance_pixel_class_ids{24, 25};
+  double instance_pixel_min_fraction = 0.3;
 };
 
 template <typename Visit>
@@ -163,6 +169,9 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("extra_sad_uniqueness", o.extra_sad_uniqueness, 0.01, 1.0);
   visit("left_right_check", o.left_right_check, 0, 1);
   visit("left_right_tolerance_px", o.left_right_tolerance_px, 0.0, 100.0);
+  visit("instance_pixel_stereo", o.instance_pixel_stereo, 0, 1);
+  visit("instance_pixel_class_ids", o.instance_pixel_class_ids, 0, 65535);
+  visit("instance_pixel_min_fraction", o.instance_pixel_min_fraction, 0.0, 1.0);
 }
 
 }  // namespace twistslam::tracking

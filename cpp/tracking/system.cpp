@@ -71,6 +71,7 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
   const ObjectTrackingOptions& vo = options_.visual_objects;
   cv::Mat object_mask;  // where extra keypoints are extracted (object instances)
   cv::Mat vehicle_instances;  // the instances that may get a second pass (planar-link classes)
+  cv::Mat thin_instances;     // people: their edge keypoints' depth from their own pixels
   if (!instances.empty() && vo.enabled && vo.extra_keypoints) {
     if (instances.type() != CV_32SC1 || instances.size() != left.size())
       throw std::invalid_argument("instances: expected int32 instance ids of the image size");
@@ -80,10 +81,13 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
         // vehicles only: a pedestrian's extra points seeded a ghost (crowded seed 0, classical)
         vehicle_instances = instances_of_classes(instances, labels, vo.planar_class_ids);
       }
+      if (vo.instance_pixel_stereo && !vo.instance_pixel_class_ids.empty())
+        thin_instances = instances_of_classes(instances, labels, vo.instance_pixel_class_ids);
     }
   }
   FrameBuildReport built = frame_builder_.build(index, timestamp, left, right, labels, points_c,
-                                                &frame, object_mask, vehicle_instances);
+                                                &frame, object_mask, vehicle_instances,
+                                                thin_instances);
   result.timings_ms = std::move(built.timings_ms);
   result.num_lidar_depth = built.num_lidar_depth;
   // The previous keyframe's BA solved beside the front end above (and, with

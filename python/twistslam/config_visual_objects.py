@@ -276,3 +276,114 @@ class VisualObjectsConfig:
         "Urban seed 0, object keypoints against the simulator's disparity: 2 removes 833 of "
         "the 1434 matches off by over 1 px (and 10 %), losing 2.5 % of the 69 k good ones; "
         "1 removes 871 and loses 3.0 %", "level px", lo=0.0, hi=100.0)
+    instance_pixel_stereo: bool = param(
+        True, "with extra_keypoints and an instance image: an object keypoint of "
+        "instance_pixel_class_ids whose SAD window also covers pixels of other instances or of "
+        "the background is matched again over the whole disparity range on its own instance's "
+        "pixels only, and loses its depth when that match is rejected. A person is thinner "
+        "than the 15 px window: beside a textured background its points took the background's "
+        "disparity (urban seed 4: a pedestrian beside a nearer tree trunk, 1.5-3 m short; urban "
+        "seed 1: one at 40-50 m, 1.3-1.5 m beyond; both ghost tracks, both gone)")
+    instance_pixel_class_ids: list[int] = param(
+        [24, 25], "classes of instance_pixel_stereo (Cityscapes person, rider). Not vehicles: "
+        "a car is wider than the window, and on its outline the contrast with the background "
+        "is what makes the window distinctive. With every object class, urban seed 3's lead "
+        "car (followed at ~30 m) lost 17 % of its frames and its aligned ATE went 0.16 -> 0.62 m")
+    instance_pixel_min_fraction: float = param(
+        0.3, "instance_pixel_stereo: a window with a smaller share of its pixels on the "
+        "keypoint's instance keeps its depth (too few pixels to match). At 0.5 neither ghost "
+        "above is removed: a person's windows hold 30-50 % of its pixels", "fraction",
+        lo=0.0, hi=1.0)
+    recenter_distance_m: float = param(
+        0.5, "the object frame's origin moves to the median of the cluster's confirmed points "
+        "when farther than this: a cluster born at 40 m sits metres off in depth until its "
+        "points are refined closer (0: never)", "m")
+    final_smoothing: bool = param(
+        True, "when the run ends, every track is refined once more in one problem: all its rows, "
+        "every observation of its points (culled ones too), e_const, e_link, e_head and the "
+        "LiDAR terms, camera poses fixed at the refined trajectory (the paper's global BA of the "
+        "object terms; the sliding window sees 8 frames and freezes the rows it leaves, with "
+        "a far car's birth transient in them). result.objects keeps the online poses as "
+        "T_w_o_online; the time is after_loop_ms. Six simulated sequences, online -> smoothed: "
+        "camera only RPE_r 0.256 -> 0.229 deg/m, aligned ATE 0.136 -> 0.092 m (urban 0.19-0.27 "
+        "-> 0.12-0.15); oracle boxes RPE_r 0.205 -> 0.146, canonical ATE 0.089 -> 0.094")
+    smoothing_iterations: int = param(
+        10, "Ceres iterations of the final smoothing per track, from the online poses: 5 left "
+        "crowded s0's oracle-box RPE_r at 0.172 deg/m against 0.143 with 10", "iterations")
+    smoothing_frame_observations: int = param(
+        30, "the final smoothing takes a track's points longest-seen first, each while one of "
+        "the frames it saw has fewer observations than this (0: every point). A crowded car "
+        "tracked 100 frames has ~2000 points and 18k observations, most short-lived: with 30, "
+        "100-200 points and 3-5k observations, 2x faster and better (crowded s0 oracle boxes "
+        "RPE_r 0.204 -> 0.143 deg/m, aligned ATE 0.047 -> 0.017 m)", "observations")
+    nonholonomic: bool = param(
+        True, "vehicles (planar-link classes) move along their heading: the window adds "
+        "e_head, the measured step across the travel axis learned from the track (not in "
+        "the paper; it ties a lead car's yaw, which its rear face at 30-45 m hardly constrains, "
+        "to its direction of travel)")
+    lateral_sigma_m: float = param(
+        0.02, "step across the travel axis allowed per frame (an origin off the rear axle in "
+        "a turn is in the Huber tail). Urban seeds 0-2 RPE_r: 0.59/0.23/0.36 deg/m at 0.02, "
+        "0.55/0.37/0.38 at 0.05, 0.56/0.59/0.45 at 0.1; crowded unchanged", "m/frame")
+    travel_min_path_m: float = param(
+        3.0, "distance the track must have travelled before its travel axis is used (urban "
+        "RPE_r 0.59/0.24/0.36 deg/m at 1.5 m, 0.59/0.23/0.36 at 3, 0.57/0.34/0.40 at 6)", "m")
+    travel_min_anisotropy: float = param(
+        10.0, "the travel axis is used once the largest eigenvalue of the step moments is "
+        "this many times the second (steps within ~18 deg of one axis)", "ratio", lo=1.0)
+    extra_keypoints: bool = param(
+        True, "a second, denser ORB pass inside the object masks, and a SAD scan along the "
+        "row for every object keypoint without stereo depth (paper: small and far objects "
+        "keep enough points)")
+    extra_keypoints_max: int = param(
+        1000, "extra keypoints per frame over all object masks", "keypoints")
+    extra_min_instance_keypoints: int = param(
+        40, "a vehicle's mask (planar_class_ids) holding fewer keypoints after the extra pass "
+        "gets a second pass of its own, with this many per such mask (0: off): the pass's "
+        "budget goes mostly to the large masks of near cars (crowded seed 2: car 69, 2200 px "
+        "at 18 m behind a near car, got 8-11 of the 1000 and 1-6 with depth, never a "
+        "cluster; its mask alone holds 58 corners). Ten sequences, camera alone: 43 -> 44 of "
+        "47 cars tracked, ghosts 4 -> 4, mean aligned ATE 0.072 -> 0.078 m; with the LiDAR "
+        "unchanged. 20 changed nothing", "keypoints", lo=0, hi=100000)
+    extra_min_instance_area_px: int = param(
+        1000, "... when its mask covers at least this many pixels: without the floor (40 "
+        "keypoints, ten sequences, camera alone) 45 cars, but the far cars' small masks took "
+        "wrong depths and the mean aligned ATE went 0.072 -> 0.100 m (urban s0 car 11: "
+        "0.04 -> 0.38 m)", "px", lo=0, hi=100000000)
+    extra_keypoint_levels: int = param(
+        2, "pyramid levels of the extra pass: far objects are small, coarse levels hold "
+        "nothing of them", "levels", lo=1, hi=32)
+    extra_fast_threshold: int = param(
+        7, "FAST threshold of the extra pass (the frame's is 20): car paint is low-contrast",
+        "grey levels", lo=1, hi=254)
+    extra_cell_px: int = param(10, "FAST retry cell of the extra pass", "px", lo=8, hi=4096)
+    extra_min_spacing_px: float = param(
+        3.0, "an extra keypoint this close to a keypoint of the frame is dropped", "px")
+    extra_min_depth_m: float = param(
+        1.5, "closest depth of the SAD scan (its cost grows with the disparity range)", "m")
+    extra_max_sad_cost: float = param(
+        0.7, "SAD scan: accepted zero-mean SAD over the window's contrast")
+    extra_sad_uniqueness: float = param(
+        0.7, "SAD scan: the best cost must be below this times the second-best minimum")
+    left_right_check: bool = param(
+        True, "with extra_keypoints: every object keypoint's stereo match is checked back "
+        "from the right image, and dropped when the right window's best match in the left "
+        "row is elsewhere. Objects occlude each other differently in the two cameras (0.54 m "
+        "apart): a car queued behind another, or far behind a near one, is partly hidden in "
+        "the right image only, and its points got the occluder's depth (crowded seed 1, car "
+        "17: stereo median 22-25 m at a true 13.7 m; urban seed 0: far oncoming cars)")
+    left_right_tolerance_px: float = param(
+        2.0, "left-right check: largest distance between the keypoint and the way back. "
+        "Urban seed 0, object keypoints against the simulator's disparity: 2 removes 833 of "
+        "the 1434 matches off by over 1 px (and 10 %), losing 2.5 % of the 69 k good ones; "
+        "1 removes 871 and loses 3.0 %", "level px", lo=0.0, hi=100.0)
+    instance_pixel_stereo: bool = param(
+        True, "with extra_keypoints and an instance image: an object keypoint whose SAD window "
+        "also covers pixels of other instances or of the background is matched again over the "
+        "whole disparity range on its own instance's pixels only, and loses its depth when that "
+        "match is rejected. A thin object beside a textured background otherwise takes the "
+        "background's disparity (urban seed 4: a pedestrian 12 px wide beside a nearer tree "
+        "trunk had all its points 1.5-3 m short)")
+    instance_pixel_min_fraction: float = param(
+        0.3, "instance_pixel_stereo: a window with a smaller share of its pixels on the "
+        "keypoint's instance keeps its depth (too few pixels to match)", "fraction", lo=0.0, hi=1.0)

@@ -392,3 +392,141 @@ TEST(CheckLeftRight, DropsMatchesTheRightCameraCannotSeeAndKeepsGoodOnes) {
 }
 
 }  // namespace
+
+// A person-like pole 11 px wide (0.12 m at 8 m), of weak texture, in front of a strongly
+// textured wall at 12 m: the 15 px SAD window of a keypoint on the pole holds more wall than
+// pole. The depth of the pole's own pixels (depth_on_instance_pixels) is the pole's; windows on
+// one instance, and windows with too small a share of it, keep the depth they had.
+struct PoleScene {
+  geometry::StereoCamera cam = test::kitti_camera();
+  cv::Mat left, right, instances;
+  std::vector<cv::Mat> pyramid_left, pyramid_right;
+  Keypoints pole, wall;  // keypoints on the pole's centre line, and in the wall's open middle
+
+  PoleScene() {
+    std::vector<test::Plane> planes = {test::make_plane(8.0, 0.0, -1.5, 0.12, 1.0, 1.3, cam.fx, 31),
+                                       test::make_plane(12.0, -6.0, -3.0, 6.0, 2.0, 1.3, cam.fx, 32)};
+    planes[0].texture = (planes[0].texture - 128.0) * 0.25 + 128.0;  // weak texture (std 10)
+    cv::Mat ids_left, ids_right;
+    left = test::render(planes, cam, false, &ids_left, 1.0, 410);
+    right = test::render(planes, cam, true, &ids_right, 1.0, 411);
+    instances = cv::Mat::zeros(ids_left.size(), CV_32SC1);
+    instances.setTo(7, ids_left == 0);  // the pole is instance 7, the wall no instance
+    pyramid_left = build_pyramid(left, 1.2f, 2);
+    pyramid_right = build_pyramid(right, 1.2f, 2);
+    for (int v = 80; v < 300; v += 6) {
+      int first = -1, last = -1;
+      for (int u = 0; u < left.cols; ++u)
+        if (ids_left.at<int>(v, u) == 0) (first < 0 ? first : last) = u, last = u;
+      if (first < 0) continue;
+      pole.keypoints.emplace_back(cv::Point2f(0.5f * (first + last), static_cast<float>(v)), 31.0f,
+                                  0.0f, 1.0f, 0);
+      wall.keypoints.emplace_back(cv::Point2f(static_cast<float>(first - 60), static_cast<float>(v)),
+                                  31.0f, 0.0f, 1.0f, 0);
+    }
+  }
+};
+
+TEST(DepthOnInstancePixels, ThinObjectInFrontOfATexturedWallGetsItsOwnDepth) {
+  const PoleScene s;
+  const int n = static_cast<int>(s.pole.size());
+  ASSERT_GE(n, 25);
+  std::vector<int> all(n);
+  for (int i = 0; i < n; ++i) all[i] = i;
+  const StereoSearchOptions options;
+  // the whole window's scan: the pole's depth for few keypoints, if any (the scene does what it
+  // is for: the wall's texture dominates the window)
+  StereoMatches whole = unmatched(n);
+  search_stereo(s.pole, s.pyramid_left, s.pyramid_right, s.cam, options, all, &whole);
+  int whole_good = 0;
+  for (int i = 0; i < n; ++i) whole_good += std::abs(whole.depth[i] - 8.0f) < 0.08f;
+  EXPECT_LT(whole_good, n / 4);
+  // every keypoint given the wall's depth (what a descriptor match refined on the whole
+  // window gave the simulator's pedestrian), then searched on the pole's pixels
+  StereoMatches m = unmatched(n);
+  const double fb = s.cam.fx * s.cam.baseline;
+  for (int i = 0; i < n; ++i) {
+    m.depth[i] = 12.0f;
+    m.u_right[i] = s.pole.keypoints[i].pt.x - static_cast<float>(fb / 12.0);
+  }
+  const InstanceSupportReport report = depth_on_instance_pixels(
+      s.pole, s.pyramid_left, s.pyramid_right, s.cam, options, all, s.instances, 0.3f, &m);
+  int good = 0, with_depth = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!(m.depth[i] > 0)) continue;
+    ++with_depth;
+    good += std::abs(m.depth[i] - 8.0f) < 0.08f;  // 1 %
+    EXPECT_NEAR(m.u_right[i], s.pole.keypoints[i].pt.x - fb / m.depth[i], 1e-3) << i;
+  }
+  std::cout << "whole window: " << whole_good << " of " << n << " at the pole's depth; own pixels: "
+            << good << " of " << with_depth << " within 1 % (" << report.num_rescanned
+            << " rescanned, " << report.num_dropped << " dropped)\n";
+  EXPECT_EQ(report.num_rescanned, n);
+  EXPECT_EQ(report.num_dropped, n - with_depth);
+  EXPECT_GE(with_depth, n * 3 / 4);
+  EXPECT_EQ(good, with_depth);  // none kept the wall's depth
+}
+
+TEST(DepthOnInstancePixels, WindowsOnOneInstanceOrWithTooLittleOfItKeepTheirDepth) {
+  const PoleScene s;
+  const int n = static_cast<int>(s.wall.size());
+  std::vector<int> all(n);
+  for (int i = 0; i < n; ++i) all[i] = i;
+  const StereoSearchOptions options;
+  // the wall's keypoints on an instance of their own (the whole image but the pole)
+  cv::Mat wall_instance = cv::Mat::zeros(s.instances.size(), CV_32SC1);
+  wall_instance.setTo(3, s.instances == 0);
+  StereoMatches m = unmatched(n);
+  search_stereo(s.wall, s.pyramid_left, s.pyramid_right, s.cam, options, all, &m);
+  const StereoMatches before = m;
+  InstanceSupportReport r = depth_on_instance_pixels(s.wall, s.pyramid_left, s.pyramid_right, s.cam,
+                                                     options, all, wall_instance, 0.3f, &m);
+  EXPECT_EQ(r.num_rescanned, 0);
+  EXPECT_EQ(m.depth, before.depth);
+  EXPECT_EQ(m.u_right, before.u_right);
+  // the pole's keypoints with a share threshold above what their windows hold: untouched
+  StereoMatches p = unmatched(s.pole.size());
+  std::vector<int> pole_all(s.pole.size());
+  for (int i = 0; i < static_cast<int>(s.pole.size()); ++i) pole_all[i] = i;
+  search_stereo(s.pole, s.pyramid_left, s.pyramid_right, s.cam, options, pole_all, &p);
+  const StereoMatches pole_before = p;
+  r = depth_on_instance_pixels(s.pole, s.pyramid_left, s.pyramid_right, s.cam, options, pole_all,
+                               s.instances, 0.9f, &p);
+  EXPECT_EQ(r.num_rescanned, 0);
+  EXPECT_EQ(p.depth, pole_before.depth);
+  // bad input
+  EXPECT_THROW(depth_on_instance_pixels(s.pole, s.pyramid_left, s.pyramid_right, s.cam, options,
+                                        pole_all, cv::Mat(s.instances.size(), CV_8UC1), 0.3f, &p),
+               std::invalid_argument);
+  EXPECT_THROW(depth_on_instance_pixels(s.pole, s.pyramid_left, s.pyramid_right, s.cam, options,
+                                        pole_all, s.instances(cv::Rect(0, 0, 100, 100)), 0.3f, &p),
+               std::invalid_argument);
+  EXPECT_THROW(depth_on_instance_pixels(s.pole, s.pyramid_left, s.pyramid_right, s.cam, options,
+                                        pole_all, s.instances, 1.5f, &p),
+               std::invalid_argument);
+}
+
+// A full support is the plain zero-mean SAD (the same column, the cost to float rounding).
+TEST(ScanSad, FullSupportIsThePlainWindow) {
+  const cv::Mat texture = test::random_texture(260, 40, 9);
+  const ShiftedPair p = shifted_pair(texture, 17, 2.0, 90);
+  const std::vector<std::uint8_t> full((2 * kHalfWidth + 1) * (2 * kHalfHeight + 1), 1);
+  for (int xl : {80, 130, 170}) {
+    const SadScan plain = scan_sad(p.left, p.right, xl, 20, xl - 60, xl, kHalfWidth, kHalfHeight);
+    const SadScan masked = scan_sad(p.left, p.right, xl, 20, xl - 60, xl, kHalfWidth, kHalfHeight,
+                                    full.data());
+    EXPECT_EQ(masked.best_column, plain.best_column);
+    EXPECT_NEAR(masked.best_cost, plain.best_cost, 1e-4f);
+    EXPECT_NEAR(masked.second_cost, plain.second_cost, 1e-4f);
+    const SadRefined a = refine_sad(p.left, p.right, xl, 20, plain.best_column, 0.3f, kHalfWidth,
+                                    kHalfHeight, 2);
+    const SadRefined b = refine_sad(p.left, p.right, xl, 20, plain.best_column, 0.3f, kHalfWidth,
+                                    kHalfHeight, 2, full.data());
+    ASSERT_TRUE(a.ok && b.ok);
+    EXPECT_NEAR(a.u_level, b.u_level, 1e-4f);
+    EXPECT_NEAR(a.cost, b.cost, 1e-4f);
+  }
+  // an empty support gives nothing
+  const std::vector<std::uint8_t> none(full.size(), 0);
+  EXPECT_LT(scan_sad(p.left, p.right, 100, 20, 40, 100, kHalfWidth, kHalfHeight, none.data()).best_column, 0);
+}
