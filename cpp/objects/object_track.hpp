@@ -34,6 +34,9 @@ struct TrackFrame {
   // the detector's own heading of that box (its x axis in w, before the alignment); zero when
   // the detector knows the heading mod pi only (Detection::point_extent: the classical one)
   Vec3 detected_heading_w = Vec3::Zero();
+  // for such a box beside the camera's lane and along its travel: the heading a parked car
+  // there has by the traffic side's rule (ObjectLidarOptions::road_side_heading; zero: none)
+  Vec3 road_side_heading_w = Vec3::Zero();
   Vec3 detected_size = Vec3::Zero();       // its l, w, h (m)
   double score = 0;               // its score (the detector's)
   double range = 0;               // its distance from the camera, m

@@ -5,6 +5,7 @@
 // its own noise (the simulator's oracle: ~0.1 m, ~2 deg) in every pose of the track. A car
 // that does not move faces the way most of its boxes do (detectors that know the heading).
 #include <algorithm>
+#include <cmath>
 
 #include "geometry/se3.hpp"
 #include "geometry/so3.hpp"
@@ -65,12 +66,33 @@ void ObjectTracker::check_heading_from_votes(int c) {
   // track around, and a car that never moves has no motion to turn it back (urban seed 4's
   // car 20: yaw 180 deg in every frame). Each box votes with its own heading in its frame.
   // One box, one vote: scores are not comparable across detectors (PointRCNN's may be negative).
+  // A box without a heading of its own votes with its road side's (road_side_heading).
   int agree = 0, against = 0;
   for (const objects::TrackFrame& row : track.frames) {
-    if (!row.has_detection() || row.detected_heading_w.isZero()) continue;
-    ++(row.detected_heading_w.dot(row.T_w_o.block<3, 1>(0, 0)) >= 0 ? agree : against);
+    if (!row.has_detection()) continue;
+    const Vec3& heading_w =
+        row.detected_heading_w.isZero() ? row.road_side_heading_w : row.detected_heading_w;
+    if (heading_w.isZero()) continue;
+    ++(heading_w.dot(row.T_w_o.block<3, 1>(0, 0)) >= 0 ? agree : against);
   }
   if (agree + against >= kHeadingMinBoxes && against > agree) turn_canonical_around(c);
+}
+
+Vec3 road_side_heading(const Mat4& T_w_c, const Mat4& T_w_box, const ObjectLidarOptions& o) {
+  if (o.road_side_heading == 0) return Vec3::Zero();
+  // the camera's travel and right (x right, z forward) and the box's length axis, in w
+  const Vec3 forward_w = T_w_c.block<3, 1>(0, 2), right_w = T_w_c.block<3, 1>(0, 0);
+  const Vec3 axis_w = T_w_box.block<3, 1>(0, 0);
+  const Vec3 from_camera_w = T_w_box.topRightCorner<3, 1>() - T_w_c.topRightCorner<3, 1>();
+  const double lateral = from_camera_w.dot(right_w);
+  const double along = axis_w.dot(forward_w);
+  if (std::abs(lateral) < o.road_side_min_lateral_m || std::abs(lateral) > o.road_side_max_lateral_m ||
+      std::abs(along) < std::cos(o.road_side_max_angle_deg * M_PI / 180.0))
+    return Vec3::Zero();
+  // right-hand traffic: beside the camera on its right, the traffic (and a car parked at
+  // that curb) goes the camera's way; on its left, the other way
+  const double facing = (lateral > 0 ? 1.0 : -1.0) * static_cast<double>(o.road_side_heading);
+  return along * facing > 0 ? axis_w : Vec3(-axis_w);
 }
 
 void ObjectTracker::turn_canonical_around(int c) {

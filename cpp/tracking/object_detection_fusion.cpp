@@ -187,6 +187,8 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
   }
   row.T_w_o_detected = T_w_box;
   row.detected_heading_w = detected_heading_w;
+  row.road_side_heading_w =
+      det.point_extent ? road_side_heading(T_w_c, T_w_box, lidar_options_) : Vec3::Zero();
   row.detected_size = Vec3(det.box.length, det.box.width, det.box.height);
   row.open_end_w = open_end_w;
   row.far_end_w = far_end_w;

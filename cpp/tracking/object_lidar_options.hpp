@@ -24,6 +24,13 @@ struct ObjectLidarOptions {
   double heading_from_motion_m = 1.5;      // travelled this far, a box frame facing backwards turns
   double heading_motion_min_sigmas = 5.0;  // ... and this many standard errors of the distance
   bool heading_from_votes = true;          // until then, it faces the way most of its boxes do
+  // a box without its own heading (mod pi) votes with the one a parked car has on its side of
+  // the camera's lane: +1 right-hand traffic (a car on the right faces the camera's travel,
+  // one on the left faces it), -1 left-hand traffic, 0 no vote
+  int road_side_heading = 1;
+  double road_side_min_lateral_m = 2.0;     // a box nearer the camera's path than this: no vote
+  double road_side_max_lateral_m = 8.0;     // ... nor one farther aside (off the camera's road)
+  double road_side_max_angle_deg = 30.0;    // ... nor one whose axis is farther off the travel
   // the canonical frame re-anchored to the mean offset of all its boxes (objects/box_offset.hpp)
   bool refine_canonical = true;
   double refine_min_range_m = 5.0;         // box weight 1 / max(range, this)^2
@@ -103,6 +110,10 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("heading_from_motion_m", o.heading_from_motion_m, 0.0, 1e6);
   visit("heading_motion_min_sigmas", o.heading_motion_min_sigmas, 0.0, 1e6);
   visit("heading_from_votes", o.heading_from_votes, 0, 1);
+  visit("road_side_heading", o.road_side_heading, -1, 1);
+  visit("road_side_min_lateral_m", o.road_side_min_lateral_m, 0.0, 1000.0);
+  visit("road_side_max_lateral_m", o.road_side_max_lateral_m, 0.0, 1000.0);
+  visit("road_side_max_angle_deg", o.road_side_max_angle_deg, 0.0, 90.0);
   visit("refine_canonical", o.refine_canonical, 0, 1);
   visit("refine_min_range_m", o.refine_min_range_m, 0.01, 1000.0);
   visit("refine_min_shift_m", o.refine_min_shift_m, 0.0, 100.0);

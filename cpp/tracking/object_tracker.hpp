@@ -55,6 +55,14 @@ struct ObjectTrackingReport {
   int num_points = 0;   // matched inlier points over all clusters
 };
 
+// The heading (a unit vector in w along the box's length axis) that a parked car in the box
+// T_w_box has by the traffic side's rule, seen from the camera T_w_c: zero when the rule is off
+// (ObjectLidarOptions::road_side_heading 0), the box lies within road_side_min_lateral_m of
+// the camera's path (its own lane: ahead or behind) or beyond road_side_max_lateral_m (off
+// the camera's road), or its axis is more than
+// road_side_max_angle_deg off the camera's travel (parked across).
+Vec3 road_side_heading(const Mat4& T_w_c, const Mat4& T_w_box, const ObjectLidarOptions& options);
+
 class ObjectTracker : public ObjectBundleTerms {
  public:
   ObjectTracker(const geometry::StereoCamera& camera, const ObjectTrackingOptions& options,
@@ -149,7 +157,8 @@ class ObjectTracker : public ObjectBundleTerms {
   // Once it has moved heading_from_motion_m, a canonical frame facing backwards turns.
   void check_heading_from_motion(int c);
   // A canonical track that has not moved that far (a parked or waiting car) faces the way
-  // most of its boxes' own headings do (weighted by score; detectors that know the heading).
+  // most of its boxes' headings do (one box, one vote; a box known mod pi votes with its road
+  // side's heading, road_side_heading).
   void check_heading_from_votes(int c);
   // Turns cluster c's canonical frame by pi about its y axis, with the boxes aligned to it.
   void turn_canonical_around(int c);

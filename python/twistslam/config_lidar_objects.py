@@ -87,6 +87,23 @@ class LidarObjectsConfig:
         "boxes know the heading mod pi only and do not vote): the first box alone set it, and "
         "the oracle's 2 % boxes off by pi turned a car waiting at a light around for good "
         "(urban s4's car 20, yaw 180 deg in every frame)")
+    road_side_heading: int = param(
+        1, "a box that knows its heading mod pi only (the classical detector's) votes with the "
+        "heading a parked car has on its side of the camera's lane: 1 right-hand traffic (beside "
+        "the camera on its right a car faces the camera's travel, on its left the other way; "
+        "parking against the traffic is not allowed in Germany, KITTI's country), -1 left-hand "
+        "traffic, 0 no vote. A parked car never moves, so nothing else gives its front: urban s4's "
+        "car 20 faced backwards (177 deg) with the classical detector", lo=-1, hi=1)
+    road_side_min_lateral_m: float = param(
+        2.0, "road_side_heading: a box whose centre lies nearer the camera's path (sideways, in "
+        "the camera frame) gives no vote: a car ahead or behind in the camera's own lane", "m")
+    road_side_max_lateral_m: float = param(
+        8.0, "road_side_heading: nor does one farther aside, off the camera's road (a two-lane "
+        "road's far curb lies ~6-7 m aside): real 0001's three cars 20-26 m to the left, in "
+        "another carriageway or a car park, face the camera's way", "m")
+    road_side_max_angle_deg: float = param(
+        30.0, "road_side_heading: a box whose length axis is farther off the camera's direction "
+        "gives no vote (parked across, or turning)", "deg", lo=0.0, hi=90.0)
     refine_canonical: bool = param(
         True, "each new box re-anchors the canonical frame to the weighted mean offset of all "
         "the track's boxes to their poses: the first box alone leaves its noise (the "

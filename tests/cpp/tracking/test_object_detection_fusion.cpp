@@ -30,7 +30,7 @@ objects::Detection true_box(const Car& car, int i, std::mt19937& rng, double ext
   d.box.width = kWidth + size_noise(rng);
   d.box.height = kHeight + size_noise(rng);
   // rot_y(yaw) = exp(y yaw) and the car turns about kUp = -y
-  d.box.yaw = -car.yaw_rate * i + extra_yaw;
+  d.box.yaw = -(car.yaw0 + car.yaw_rate * i) + extra_yaw;
   d.score = 5.0;
   d.class_id = class_id;
   return d;
@@ -292,7 +292,8 @@ TEST_F(DetectionFusion, AParkedCarFacesTheWayMostOfItsBoxesDo) {
 
 TEST_F(DetectionFusion, PointExtentBoxesDoNotVoteOnTheHeading) {
   // the classical detector's boxes know the heading mod pi: a parked car whose later boxes
-  // all face backwards keeps the frame of its first box (the right one here)
+  // all face backwards keeps the frame of its first box (the right one here); parked across
+  // the camera's travel, it gets no road-side vote either
   const Car car = make_car(rng, Vec3(-3, 0.5, 16), Vec3::Zero(), 0.0);
   Boxes boxes;
   boxes.extra_yaw = M_PI;
@@ -303,6 +304,73 @@ TEST_F(DetectionFusion, PointExtentBoxesDoNotVoteOnTheHeading) {
   ASSERT_EQ(tracker.tracks().size(), 1u);
   const Vec3 x_axis = tracker.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
   EXPECT_GT(x_axis.dot(car.pose(7).block<3, 1>(0, 0)), 0.99);
+}
+
+TEST_F(DetectionFusion, APointExtentParkedCarFacesItsRoadSidesTraffic) {
+  // parked along the camera's travel, 4 m to its right (facing the camera's way) or its left
+  // (facing the camera), every box of the classical detector facing backwards: the road side
+  // turns the frame around (right-hand traffic); without the rule the first box's frame stays
+  for (const double side : {1.0, -1.0}) {
+    Car car = make_car(rng, Vec3(4.0 * side, 0.5, 16), Vec3::Zero(), 0.0);
+    car.yaw0 = side * M_PI / 2;  // x along +z on the right, along -z on the left
+    Boxes boxes;
+    boxes.extra_yaw = M_PI;
+    boxes.far_end_shortfall_m = 0.01;
+    boxes.point_extent = true;
+    const auto voted = track_one_car(car, boxes, 8);
+    ASSERT_EQ(voted.tracks().size(), 1u);
+    EXPECT_FALSE(voted.tracks()[0].heading_from_motion);
+    const Vec3 x_axis = voted.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
+    EXPECT_GT(x_axis.dot(car.pose(7).block<3, 1>(0, 0)), 0.99) << side;
+    tracking::ObjectLidarOptions lidar;
+    lidar.road_side_heading = 0;
+    auto no_rule = make_tracker({}, lidar);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    run_with_boxes(no_rule, car, background, 8, boxes, rng, &reports);
+    ASSERT_EQ(no_rule.tracks().size(), 1u);
+    const Vec3 car_x = car.pose(7).block<3, 1>(0, 0);
+    const Vec3 no_rule_x = no_rule.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
+    EXPECT_LT(no_rule_x.dot(car_x), -0.99) << side;
+    // left-hand traffic turns it the other way
+    lidar.road_side_heading = -1;
+    auto left_hand = make_tracker({}, lidar);
+    run_with_boxes(left_hand, car, background, 8, boxes, rng, &reports);
+    ASSERT_EQ(left_hand.tracks().size(), 1u);
+    const Vec3 left_hand_x = left_hand.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
+    EXPECT_LT(left_hand_x.dot(car_x), -0.99) << side;
+  }
+}
+
+TEST(RoadSideHeading, VotesOnlyBesideTheCamerasLaneAndAlongItsTravel) {
+  tracking::ObjectLidarOptions o;  // right-hand traffic, 2-8 m aside, within 30 deg
+  const Mat4 T_w_c = Mat4::Identity();  // camera at the origin, travelling along +z
+  auto box = [](double x, double z, double yaw) {  // KITTI yaw: x axis (cos, 0, -sin)
+    Mat4 T = Mat4::Identity();
+    T.block<3, 3>(0, 0) = geometry::so3_exp(Vec3(0, yaw, 0));
+    T.topRightCorner<3, 1>() = Vec3(x, 1.0, z);
+    return T;
+  };
+  const Vec3 forward(0, 0, 1);
+  // along the travel on the right: the camera's way, whichever way the box faced
+  EXPECT_GT(tracking::road_side_heading(T_w_c, box(4, 15, -M_PI / 2), o).dot(forward), 0.99);
+  EXPECT_GT(tracking::road_side_heading(T_w_c, box(4, 15, M_PI / 2), o).dot(forward), 0.99);
+  // on the left: towards the camera
+  EXPECT_LT(tracking::road_side_heading(T_w_c, box(-4, 15, -M_PI / 2), o).dot(forward), -0.99);
+  // 20 deg off the travel still votes, 40 deg does not
+  EXPECT_GT(tracking::road_side_heading(T_w_c, box(4, 15, -M_PI / 2 + 0.35), o).norm(), 0.99);
+  EXPECT_TRUE(tracking::road_side_heading(T_w_c, box(4, 15, -M_PI / 2 + 0.7), o).isZero());
+  // in the camera's lane, across it, or off its road: no vote
+  EXPECT_TRUE(tracking::road_side_heading(T_w_c, box(1, 15, -M_PI / 2), o).isZero());
+  EXPECT_TRUE(tracking::road_side_heading(T_w_c, box(4, 15, 0.0), o).isZero());
+  EXPECT_TRUE(tracking::road_side_heading(T_w_c, box(-20, 40, -M_PI / 2), o).isZero());
+  // the camera turned round (travelling along -z): the sides and the travel swap together
+  Mat4 T_back = Mat4::Identity();
+  T_back.block<3, 3>(0, 0) = geometry::so3_exp(Vec3(0, M_PI, 0));
+  EXPECT_LT(tracking::road_side_heading(T_back, box(-4, -15, M_PI / 2), o).dot(forward), -0.99);
+  o.road_side_heading = -1;  // left-hand traffic
+  EXPECT_LT(tracking::road_side_heading(T_w_c, box(4, 15, -M_PI / 2), o).dot(forward), -0.99);
+  o.road_side_heading = 0;
+  EXPECT_TRUE(tracking::road_side_heading(T_w_c, box(4, 15, -M_PI / 2), o).isZero());
 }
 
 TEST_F(DetectionFusion, BoxesBeforeTheClusterStartsBecomeItsFirstRows) {

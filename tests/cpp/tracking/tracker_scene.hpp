@@ -38,12 +38,13 @@ struct Car {
   Vec3 c0 = Vec3::Zero();
   Vec3 velocity = Vec3::Zero();  // m/frame, world at frame 0 (turns with the yaw)
   double yaw_rate = 0;           // rad/frame about kUp
+  double yaw0 = 0;               // rad about kUp at frame 0 (pi / 2: x along the camera's z)
   int label = kCar;
 
   Mat4 pose(int i) const {
     Vec3 c = c0;
     for (int k = 0; k < i; ++k) c += geometry::so3_exp(kUp * (yaw_rate * k)) * velocity;
-    return geometry::make_pose(geometry::so3_exp(kUp * (yaw_rate * i)), c);
+    return geometry::make_pose(geometry::so3_exp(kUp * (yaw0 + yaw_rate * i)), c);
   }
   // True world-frame motion from frame i to i + 1: P_{i+1} P_i^-1.
   Mat4 motion(int i) const { return pose(i + 1) * geometry::se3_inverse(pose(i)); }
