@@ -22,7 +22,7 @@ ROOT = require_real_data("kitti_tracking")
 LABEL = require_real_data("kitti_tracking", "training", "label_02", "0001.txt")
 
 MOT_KEYS = {"mota", "motp", "idsw", "frag", "fp", "fn", "mt", "ml"}
-OBJECT_KEYS = {"ate", "rpe_t", "rpe_r", "tp_2d", "motp_2d", "tp_bv", "motp_bv", "tp_3d", "motp_3d"}
+OBJECT_KEYS = {"ate", "rpe_t", "rpe_r", "yaw", "tp_2d", "motp_2d", "tp_bv", "motp_bv", "tp_3d", "motp_3d"}
 CAMERA_KEYS = {"rpe_t_mean", "rpe_r_mean", "rpe_t_rmse", "rpe_r_rmse", "ate_rmse"}
 
 

@@ -6,6 +6,7 @@ import json
 import warnings
 
 import numpy as np
+import pytest
 
 from twistslam.datasets import read_labels, write_tracking_results
 from twistslam.eval.camera import CameraMetrics
@@ -52,13 +53,15 @@ def test_object_tables_print_the_paper_rows_of_the_same_object(tmp_path, kitti_t
     lines = text.splitlines()
     i = lines.index(next(line for line in lines if line.startswith("03 / 1 / car")))
     ours = lines[i].split()
-    assert ours[5] == "ours" and ours[6:9] == ["0.000", "0.000", "0.000"]
+    # ATE, RPE_t, RPE_R and the yaw error of the labels themselves: zero
+    assert ours[5] == "ours" and ours[6:10] == ["0.000", "0.000", "0.000", "0.000"]
     # the lines after ours: one per system of the paper, with its numbers from tables.json
+    # (the paper gives no yaw error: "-")
     for k, (system, rows) in enumerate(paper["objects"].items()):
         row = next(r for r in rows if r["seq"] == "03" and r["track_id"] == 1)
         cells = lines[i + 1 + k].split()
-        assert " ".join(cells[:-3]) == system
-        assert cells[-3:] == [f"{row[key]:.2f}" for key in ("ate", "rpe_t", "rpe_r")]
+        assert " ".join(cells[:-4]) == system
+        assert cells[-4:] == [f"{row[key]:.2f}" for key in ("ate", "rpe_t", "rpe_r")] + ["-"]
     # objects without a paper row have none
     j = lines.index(next(line for line in lines if line.startswith("03 / 0 / car")))
     assert lines[j + 1].startswith("03 / ")
@@ -76,3 +79,25 @@ def test_nan_prints_as_dash_and_json_as_null():
     assert row.split() == ["02", "ours", "-", "-", "-", "-", "-"]
     assert json.loads(json.dumps(m.to_dict()))["camera"]["ate_rmse"] is None
     assert np.isnan(m.objects_mean["ate"])
+
+
+def test_yaw_error_counts_a_box_facing_backwards_as_180_degrees(tmp_path, kitti_tracking):
+    # the labels as results, one track's boxes turned by pi (and one by 10 deg): the box
+    # covers the same space (its IoU, ATE and MOTP unchanged) but its heading is wrong
+    gt = read_labels(kitti_tracking / "training" / "label_02" / "0003.txt")
+    cars = np.unique(gt.track_id[np.char.lower(gt.cls.astype(str)) == "car"])
+    flipped, turned = int(cars[0]), int(cars[1])
+    box = gt.box_3d.copy()
+    box[gt.track_id == flipped, 6] += np.pi
+    box[gt.track_id == turned, 6] += np.radians(10.0)
+    est = type(gt)(**{**vars(gt), "box_3d": box})
+    write_tracking_results(tmp_path / "tracking" / "0003.txt", est)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = evaluate_sequence(kitti_tracking, tmp_path, "0003")
+    yaw = {o.track_id: o.yaw for o in m.objects}
+    assert yaw[flipped] == pytest.approx(180.0, abs=1e-3)
+    assert yaw[turned] == pytest.approx(10.0, abs=1e-3)
+    assert all(v == pytest.approx(0.0, abs=1e-3) for t, v in yaw.items() if t not in (flipped, turned))
+    ate = {o.track_id: o.ate for o in m.objects}
+    assert ate[flipped] == pytest.approx(0.0, abs=1e-6)

@@ -13,7 +13,7 @@ from .difficulty import DIFFICULTIES, Difficulty
 
 #: per-object metric keys, in the paper's column order
 OBJECT_KEYS = (
-    "ate", "rpe_t", "rpe_r",
+    "ate", "rpe_t", "rpe_r", "yaw",
     "tp_2d", "motp_2d", "tp_bv", "motp_bv", "tp_3d", "motp_3d",
 )
 
@@ -58,7 +58,10 @@ class ObjectTrackMetrics:
     """One row of the paper's object tables: a ground-truth track and its paired estimate.
 
     Pose errors (``ate``, ``ate_aligned`` in m, ``rpe_t`` m/m, ``rpe_r`` deg/m) are NaN
-    when no estimated track was ever matched to it in 3D; TP rates and MOTPs are in percent.
+    when no estimated track was ever matched to it in 3D; ``yaw`` (deg) is the mean heading
+    error of the paired estimate's boxes over their common frames, each in its own camera
+    frame, modulo 2 pi (a box facing backwards is 180 deg off); TP rates and MOTPs are in
+    percent.
     """
 
     seq: str
@@ -71,6 +74,7 @@ class ObjectTrackMetrics:
     ate_aligned: float
     rpe_t: float
     rpe_r: float
+    yaw: float
     tp_2d: float
     motp_2d: float
     tp_bv: float

@@ -18,7 +18,8 @@ import numpy as np
 
 from .metrics import OBJECT_KEYS, SequenceMetrics
 
-POSE_COLUMNS = [("ate", "ATE (m)"), ("rpe_t", "RPE_t (m/m)"), ("rpe_r", "RPE_R (deg/m)")]
+POSE_COLUMNS = [("ate", "ATE (m)"), ("rpe_t", "RPE_t (m/m)"), ("rpe_r", "RPE_R (deg/m)"),
+                ("yaw", "yaw (deg)")]
 DETECTION_COLUMNS = [
     ("tp_2d", "2D TP"), ("motp_2d", "2D MOTP"), ("tp_bv", "BV TP"),
     ("motp_bv", "BV MOTP"), ("tp_3d", "3D TP"), ("motp_3d", "3D MOTP"),
@@ -84,7 +85,7 @@ def _paper_objects(paper: dict | None, seq: str, track_id: int) -> list[tuple[st
 
 def _object_tables(runs: list[SequenceMetrics], paper: dict | None) -> list[Table]:
     first = ["seq / obj. id / class", "system"]
-    pose = Table("Object pose (ATE m, RPE_t m/m, RPE_R deg/m)",
+    pose = Table("Object pose (ATE m, RPE_t m/m, RPE_R deg/m, yaw error deg)",
                  first + [h for _, h in POSE_COLUMNS], [])
     det = Table("Object boxes (TP and MOTP in %)", first + [h for _, h in DETECTION_COLUMNS], [])
     all_rows = []

@@ -14,6 +14,7 @@ from .matching import MODES, Matching, iou_function, sequence_overlaps
 from .metrics import EvalSettings, ObjectTrackMetrics, SequenceMetrics, Trajectories
 from .mot import sequence_mot
 from .object_poses import TrackPoseErrors, track_pose_errors, world_poses
+from .object_yaw import heading_error_deg
 from .protocol import Protocol, get_protocol
 from .results import load_results, seq_name
 from .track_metrics import pair_tracks, track_detection
@@ -84,18 +85,23 @@ def _object_rows(
         Q, ok = world_poses(g.frame, g.box_3d, gt_T_w_c)
         gt_frames, Q = g.frame[ok], Q[ok]
         pose, est_xyz, est_tid = no_pose, None, pairs.get(tid)
+        yaw = float("nan")
         if est_tid is not None:
             e = est.select(est.track_id == est_tid)
             P, ok = world_poses(e.frame, e.box_3d, est_T_w_c)
             pose = track_pose_errors(gt_frames, Q, e.frame[ok], P[ok])
             est_xyz = P[ok][np.argsort(e.frame[ok]), :3, 3]
+            # headings in each frame's own camera (the boxes' ry): no camera error enters
+            _, gi, ei = np.intersect1d(g.frame, e.frame, return_indices=True)
+            if len(gi):
+                yaw = float(np.mean(heading_error_deg(e.box_3d[ei, 6], g.box_3d[gi, 6])))
         traj.objects[tid] = (Q[np.argsort(gt_frames), :3, 3], est_xyz)
         d = {mode: detection[mode][tid] for mode in MODES}
         rows.append(ObjectTrackMetrics(
             seq=seq, track_id=tid, cls=cls, est_track_id=est_tid,
             n_frames=d["3d"].n_frames, n_pose_frames=pose.n_frames,
             ate=pose.ate, ate_aligned=pose.ate_aligned, rpe_t=pose.rpe_t, rpe_r=pose.rpe_r,
-            tp_2d=d["2d"].tp_rate, motp_2d=d["2d"].motp,
+            yaw=yaw, tp_2d=d["2d"].tp_rate, motp_2d=d["2d"].motp,
             tp_bv=d["bv"].tp_rate, motp_bv=d["bv"].motp,
             tp_3d=d["3d"].tp_rate, motp_3d=d["3d"].motp,
         ))
