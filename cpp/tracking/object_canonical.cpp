@@ -3,7 +3,8 @@
 // drives backwards in it (a LiDAR box's heading is known mod pi), and is re-anchored to the
 // weighted mean offset of all its boxes (objects/box_offset.hpp): the first box alone leaves
 // its own noise (the simulator's oracle: ~0.1 m, ~2 deg) in every pose of the track. A car
-// that does not move faces the way most of its boxes do (detectors that know the heading).
+// that does not move faces the way most of its boxes do (detectors that know the heading; a
+// box known mod pi votes with the heading of parked traffic on its side of the road).
 #include <algorithm>
 #include <cmath>
 

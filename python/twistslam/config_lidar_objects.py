@@ -92,8 +92,9 @@ class LidarObjectsConfig:
         "heading a parked car has on its side of the camera's lane: 1 right-hand traffic (beside "
         "the camera on its right a car faces the camera's travel, on its left the other way; "
         "parking against the traffic is not allowed in Germany, KITTI's country), -1 left-hand "
-        "traffic, 0 no vote. A parked car never moves, so nothing else gives its front: urban s4's "
-        "car 20 faced backwards (177 deg) with the classical detector", lo=-1, hi=1)
+        "traffic, 0 no vote. A parked car never moves, so nothing else gives its front: on real "
+        "0001 the classical detector's boxes of cars along the road faced backwards (124 of "
+        "127 matched boxes; 31 with the vote, median yaw error 178 -> 2 deg)", lo=-1, hi=1)
     road_side_min_lateral_m: float = param(
         2.0, "road_side_heading: a box whose centre lies nearer the camera's path (sideways, in "
         "the camera frame) gives no vote: a car ahead or behind in the camera's own lane", "m")

@@ -317,27 +317,22 @@ TEST_F(DetectionFusion, APointExtentParkedCarFacesItsRoadSidesTraffic) {
     boxes.extra_yaw = M_PI;
     boxes.far_end_shortfall_m = 0.01;
     boxes.point_extent = true;
-    const auto voted = track_one_car(car, boxes, 8);
-    ASSERT_EQ(voted.tracks().size(), 1u);
-    EXPECT_FALSE(voted.tracks()[0].heading_from_motion);
-    const Vec3 x_axis = voted.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
-    EXPECT_GT(x_axis.dot(car.pose(7).block<3, 1>(0, 0)), 0.99) << side;
-    tracking::ObjectLidarOptions lidar;
-    lidar.road_side_heading = 0;
-    auto no_rule = make_tracker({}, lidar);
-    std::vector<tracking::ObjectTrackingReport> reports;
-    run_with_boxes(no_rule, car, background, 8, boxes, rng, &reports);
-    ASSERT_EQ(no_rule.tracks().size(), 1u);
-    const Vec3 car_x = car.pose(7).block<3, 1>(0, 0);
-    const Vec3 no_rule_x = no_rule.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
-    EXPECT_LT(no_rule_x.dot(car_x), -0.99) << side;
-    // left-hand traffic turns it the other way
-    lidar.road_side_heading = -1;
-    auto left_hand = make_tracker({}, lidar);
-    run_with_boxes(left_hand, car, background, 8, boxes, rng, &reports);
-    ASSERT_EQ(left_hand.tracks().size(), 1u);
-    const Vec3 left_hand_x = left_hand.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
-    EXPECT_LT(left_hand_x.dot(car_x), -0.99) << side;
+    // the last frame's x axis against the car's, with the rule as given
+    auto facing = [&](int road_side_heading) {
+      tracking::ObjectLidarOptions lidar;
+      lidar.road_side_heading = road_side_heading;
+      auto tracker = make_tracker({}, lidar);
+      std::vector<tracking::ObjectTrackingReport> reports;
+      run_with_boxes(tracker, car, background, 8, boxes, rng, &reports);
+      EXPECT_EQ(tracker.tracks().size(), 1u);
+      if (tracker.tracks().size() != 1u) return 0.0;
+      EXPECT_FALSE(tracker.tracks()[0].heading_from_motion);
+      const Vec3 x_axis = tracker.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
+      return x_axis.dot(car.pose(7).block<3, 1>(0, 0));
+    };
+    EXPECT_GT(facing(1), 0.99) << side;    // right-hand traffic (the default)
+    EXPECT_LT(facing(0), -0.99) << side;   // no rule: the first box's frame
+    EXPECT_LT(facing(-1), -0.99) << side;  // left-hand traffic turns it the other way
   }
 }
 
