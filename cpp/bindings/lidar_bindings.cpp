@@ -137,6 +137,27 @@ DoubleArray correct_scan(const py::handle& points_velo, double angle_deg) {
   return out;
 }
 
+py::tuple scan_to_camera(const py::handle& points_velo, const py::handle& T_c_velo, double angle_deg) {
+  using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+  py::array raw = py::array::ensure(points_velo);
+  if (points_velo.is_none() || !raw || raw.ndim() != 2 || raw.shape(1) < 3)
+    throw py::value_error("points_velo: expected shape (N, >=3), got " +
+                          (raw ? shape_string(raw) : std::string("None")));
+  const FloatArray a = FloatArray::ensure(raw);
+  const Mat4 T = as_mat4(T_c_velo, "T_c_velo");
+  const py::ssize_t n = a.shape(0), cols = a.shape(1);
+  FloatArray velo({n, cols}), camera({n, cols});
+  try {
+    py::gil_scoped_release release;
+    l::scan_to_camera(Eigen::Map<const l::ScanRows>(a.data(), n, cols), T, angle_deg,
+                      Eigen::Map<l::ScanRows>(velo.mutable_data(), n, cols),
+                      Eigen::Map<l::ScanRows>(camera.mutable_data(), n, cols));
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  return py::make_tuple(velo, camera);
+}
+
 std::vector<double> as_vector(const py::handle& obj, const char* name) {
   const DoubleArray a = as_double_array(obj, name);
   if (a.ndim() != 1)
@@ -258,6 +279,30 @@ angle_deg : float
 Returns
 -------
 (N, C) float64 array, range and azimuth of every point kept.
+)doc");
+  m.def("scan_to_camera", &scan_to_camera, "points_velo"_a, "T_c_velo"_a, "angle_deg"_a = 0.0,
+        R"doc(A KITTI scan corrected (``angle_deg``, as :func:`correct_kitti_scan`) and moved into
+the camera frame, in one pass (what the dataset readers do with every scan).
+
+Parameters
+----------
+points_velo : (N, C >= 3) array
+    Velodyne points (x forward, y left, z up), converted to float32; extra columns
+    (intensity) are carried along.
+T_c_velo : (4, 4) array
+    Velodyne -> rectified camera frame (``R_rect @ Tr_velo_cam``).
+angle_deg : float
+    Upward elevation correction (0: none, the simulator's exact scans).
+
+Returns
+-------
+(points_velo, points_c): two (N, C) float32 arrays, the corrected scan and the same rows with
+(x, y, z) = ``T_c_velo`` X.
+
+Raises
+------
+ValueError
+    On fewer than 3 columns, a non-finite angle or transform.
 )doc");
   m.def("estimate_disparity_offset", &disparity_offset, "disparities"_a, "lidar_depths"_a,
         "fx_baseline"_a, "min_samples"_a = l::DisparityOffsetOptions{}.min_samples,

@@ -1,6 +1,6 @@
 #include "geometry/plane_fit.hpp"
 
-#include <Eigen/SVD>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -56,11 +56,16 @@ Points3 gather(const Points3& P, const std::vector<std::uint8_t>& flags, int cou
 Vec4 fit_plane_svd(const Points3& points) {
   if (points.rows() < 3) throw std::invalid_argument("fit_plane_svd: needs at least 3 points");
   const Eigen::RowVector3d centroid = points.colwise().mean();
-  const Eigen::MatrixX3d centred = points.rowwise() - centroid;
-  // Full V: with a fixed number of columns (3) V is 3x3 either way, and Eigen only allows thin
-  // U/V for matrices with a dynamic column count (it asserts in a Debug build otherwise).
-  Eigen::JacobiSVD<Eigen::MatrixX3d> svd(centred, Eigen::ComputeFullV);
-  const Vec3 n = svd.matrixV().col(2).normalized();
+  // The smallest right singular vector of the centred points is the eigenvector of their 3x3
+  // scatter matrix with the smallest eigenvalue: the same plane, without an SVD of an N x 3
+  // matrix (a LiDAR ground of 40k points took milliseconds per refit).
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const Vec3 d = (points.row(i) - centroid).transpose();
+    scatter.noalias() += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);  // eigenvalues ascending
+  const Vec3 n = eig.eigenvectors().col(0).normalized();
   return oriented(n, -n.dot(centroid.transpose()));
 }
 
@@ -72,18 +77,28 @@ PlaneFit fit_plane_ransac(const Points3& points, const PlaneFitOptions& options)
   if (!(options.inlier_threshold > 0) || options.iterations < 1)
     throw std::invalid_argument("fit_plane_ransac: inlier_threshold must be > 0, iterations >= 1");
 
+  // hypotheses are scored on an evenly strided subset of at most max_scored_points points
+  // (the refits below use all of them)
+  const Eigen::Index stride =
+      options.max_scored_points > 0 ? std::max<Eigen::Index>(1, (n + options.max_scored_points - 1) / options.max_scored_points) : 1;
+  Points3 strided;
+  if (stride > 1) {
+    strided.resize((n + stride - 1) / stride, 3);
+    for (Eigen::Index i = 0, k = 0; i < n; i += stride, ++k) strided.row(k) = points.row(i);
+  }
+  const Points3& scored = stride > 1 ? strided : points;
   std::mt19937_64 rng(options.seed);
-  std::uniform_int_distribution<Eigen::Index> pick(0, n - 1);
+  std::uniform_int_distribution<Eigen::Index> pick(0, scored.rows() - 1);
   Vec4 best = Vec4::Zero();
   int best_count = -1;
   for (int it = 0; it < options.iterations; ++it) {
-    const Vec3 a = points.row(pick(rng)), b = points.row(pick(rng)), c = points.row(pick(rng));
+    const Vec3 a = scored.row(pick(rng)), b = scored.row(pick(rng)), c = scored.row(pick(rng));
     const Vec3 normal = (b - a).cross(c - a);
     const double len = normal.norm();
     if (len < 1e-12) continue;  // collinear or repeated sample
     const Vec3 u = normal / len;
     const Vec4 candidate = oriented(u, -u.dot(a));
-    const int count = count_inliers_above(points, candidate, options.inlier_threshold, best_count);
+    const int count = count_inliers_above(scored, candidate, options.inlier_threshold, best_count);
     if (count > best_count) {
       best_count = count;
       best = candidate;

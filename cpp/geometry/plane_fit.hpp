@@ -12,6 +12,9 @@ struct PlaneFitOptions {
   double inlier_threshold = 0.05;  // m, point-to-plane distance counted as inlier
   int iterations = 200;            // RANSAC samples
   std::uint64_t seed = 0;          // deterministic sampling
+  // > 0: samples are drawn from, and scored on, an evenly strided subset of at most this many
+  // points (a LiDAR ground holds tens of thousands); the refits use every point. 0: all
+  int max_scored_points = 0;
 };
 
 struct PlaneFit {

@@ -17,4 +17,15 @@ constexpr double kKittiVerticalAngleOffsetDeg = 0.205;  // deg, upward
 Points3 correct_kitti_scan(const Eigen::Ref<const Points3>& points_velo,
                            double angle_deg = kKittiVerticalAngleOffsetDeg);
 
+// A scan as read from a KITTI .bin: rows (x, y, z, extra columns such as intensity), float.
+using ScanRows = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// The reader's one pass over a scan: the elevation correction and the transform into the
+// (rectified) camera frame, extra columns carried along, written into `velo` (the corrected
+// scan, as correct_kitti_scan) and `camera` ((x, y, z) = T_c_velo X), each of the input's
+// shape. Computed in double, stored in float. std::invalid_argument for fewer than 3 columns,
+// an output of another shape, a non-finite angle or transform.
+void scan_to_camera(const Eigen::Ref<const ScanRows>& points_velo, const Mat4& T_c_velo,
+                    double angle_deg, Eigen::Ref<ScanRows> velo, Eigen::Ref<ScanRows> camera);
+
 }  // namespace twistslam::lidar

@@ -116,6 +116,31 @@ def test_correct_kitti_scan_matches_a_hand_computed_rotation():
         lidar.correct_kitti_scan(np.zeros((4, 2)))
 
 
+def test_scan_in_camera_is_the_correction_then_the_calibration_transform():
+    from twistslam.datasets.sensors import scan_in_camera
+    from twistslam.geometry import so3_exp
+
+    rng = np.random.default_rng(3)
+    scan = np.hstack([rng.uniform(-60, 60, (500, 3)), rng.uniform(0, 1, (500, 1))]).astype(np.float32)
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = so3_exp(np.array([1.2, -1.1, 1.3])), [0.1, -0.2, 0.3]
+    for angle in (0.0, 0.205):
+        velo, cam = scan_in_camera(scan, T, angle)
+        assert velo.dtype == cam.dtype == np.float32 and velo.shape == cam.shape == (500, 4)
+        expected = lidar.correct_kitti_scan(scan, angle)
+        np.testing.assert_allclose(velo, expected, atol=2e-5)
+        np.testing.assert_allclose(cam[:, :3], expected[:, :3] @ T[:3, :3].T + T[:3, 3], atol=2e-5)
+        np.testing.assert_array_equal(cam[:, 3], scan[:, 3])
+    with pytest.raises(ValueError, match="points_velo"):
+        scan_in_camera(np.zeros((4, 2), np.float32), T)
+    with pytest.raises(ValueError, match="T_c_velo"):
+        scan_in_camera(scan, np.full((4, 4), np.nan))
+    with pytest.raises(ValueError, match="angle_deg"):
+        scan_in_camera(scan, T, float("nan"))
+    empty_velo, empty_cam = scan_in_camera(np.zeros((0, 4), np.float32), T)
+    assert empty_velo.shape == empty_cam.shape == (0, 4)
+
+
 def test_disparity_offset_estimate():
     rng = np.random.default_rng(0)
     z = rng.uniform(5, 60, 500)

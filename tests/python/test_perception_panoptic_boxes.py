@@ -8,11 +8,10 @@ import pytest
 
 from conftest import require_real_data
 from twistslam.datasets import KittiTracking, data_path
-from twistslam.perception.hull_fill import fill_convex_hull
+from twistslam import _core
 from twistslam.perception.panoptic import CAR, ROAD
 from twistslam.perception.panoptic_files import SimPanopticFiles
-from twistslam.perception.panoptic_from_boxes import (BoxMaskConfig, PanopticFromBoxes,
-                                                      ground_plane, points_in_box)
+from twistslam.perception.panoptic_from_boxes import BoxMaskConfig, PanopticFromBoxes, ground_plane
 from twistslam.perception.panoptic_source import panoptic_source
 from twistslam.sim.generate import generate
 
@@ -25,35 +24,96 @@ def sim_sequence(tmp_path_factory):
     return KittiTracking(out, "0000")
 
 
+def points_in_box(points: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """(N,) bool, the test's own reference: ``points`` (N, 3, camera frame) inside ``box``
+    ``[cx cy cz l w h ry]`` (KITTI's object frame: x along the length, y down)."""
+    c, (l, w, h), ry = box[:3], box[3:6], box[6]
+    d = points - c
+    x = np.cos(ry) * d[:, 0] - np.sin(ry) * d[:, 2]
+    z = np.sin(ry) * d[:, 0] + np.cos(ry) * d[:, 2]
+    return (np.abs(x) <= l / 2) & (np.abs(d[:, 1]) <= h / 2) & (np.abs(z) <= w / 2)
+
+
 def test_hull_fill_covers_the_hull_and_the_points_pixels():
-    mask = fill_convex_hull(np.array([[2.0, 2.0], [8.0, 2.0], [8.0, 6.0], [2.0, 6.0], [5, 4]]), (10, 12))
+    fill = _core.perception.convex_hull_mask
+    mask = fill(np.array([[2.0, 2.0], [8.0, 2.0], [8.0, 6.0], [2.0, 6.0], [5, 4]]), 10, 12)
     expected = np.zeros((10, 12), bool)
     expected[2:6, 2:8] = True  # pixel centres inside [2, 8] x [2, 6]
     expected[6, 8] = expected[2, 8] = expected[6, 2] = True  # pixels holding a corner point
     np.testing.assert_array_equal(mask, expected)
     # a hull reaching far outside the image (a point near the camera plane) is clipped
-    huge = fill_convex_hull(np.array([[-1e7, 5.0], [1e7, 5.0], [0.0, -1e7]]), (10, 12))
+    huge = fill(np.array([[-1e7, 5.0], [1e7, 5.0], [0.0, -1e7]]), 10, 12)
     assert huge[:5].all() and not huge[5:].any()
+    # fewer than 3 distinct points, a collinear set or a NaN point: nothing
+    assert not fill(np.array([[1.0, 1.0], [1.0, 1.0], [3.0, 3.0]]), 10, 12).any()
+    assert not fill(np.array([[0.0, 0.0], [4.0, 4.0], [8.0, 8.0]]), 10, 12)[1:].any()
+    assert not fill(np.array([[2.0, 2.0], [8.0, 2.0], [np.nan, 6.0]]), 10, 12).any()
+    with pytest.raises(ValueError, match="points"):
+        fill(np.zeros((4, 3)), 10, 12)
 
 
-def test_convex_hull_drops_interior_points_without_changing_the_hull():
-    """The Akl-Toussaint filter before the monotone chain is exact: on clouds with
-    duplicates, collinear runs, points on a circle (every one a hull vertex) and thousands of
-    interior points, the hull is vertex for vertex the chain's on all points."""
-    from twistslam.perception.hull_fill import _drop_interior, _monotone_chain, convex_hull
+def test_hull_fill_matches_pixel_centre_tests_on_random_triangles():
+    """Against a brute-force test of every pixel centre (cross products with each edge)."""
+    rng = np.random.default_rng(1)
+    H, W = 40, 60
+    v, u = np.mgrid[0:H, 0:W] + 0.5
+    for _ in range(50):
+        tri = rng.uniform([-10, -10], [W + 10, H + 10], size=(3, 2))
+        hull = _core.perception.convex_hull(tri)
+        if len(hull) < 3:
+            continue
+        inside = np.ones((H, W), bool)
+        for a, b in zip(hull, np.roll(hull, -1, axis=0)):
+            cross = (b[0] - a[0]) * (v - a[1]) - (b[1] - a[1]) * (u - a[0])
+            inside &= cross >= -1e-9
+        pix = np.floor(tri).astype(int)
+        ok = (pix[:, 0] >= 0) & (pix[:, 0] < W) & (pix[:, 1] >= 0) & (pix[:, 1] < H)
+        inside[pix[ok, 1], pix[ok, 0]] = True
+        np.testing.assert_array_equal(_core.perception.convex_hull_mask(tri, H, W), inside)
 
+
+def test_convex_hull_is_the_convex_polygon_of_the_extreme_points():
+    """On clouds with duplicates, collinear runs and points all on a circle: the hull's
+    vertices are input points, it turns left at every vertex (strictly: collinear points are
+    dropped), and every input point lies inside or on it."""
     rng = np.random.default_rng(0)
     angles = rng.uniform(0, 2 * np.pi, 500)
     clouds = [rng.normal(size=(3000, 2)) * 40 + [600, 180],
               rng.integers(0, 12, size=(800, 2)).astype(float),  # duplicates, collinear edges
               np.stack([np.cos(angles), np.sin(angles)], axis=1) * 100,  # all on the hull
               np.array([[0.0, 0], [10, 0], [5, 0], [0, 0]] * 10)]  # collinear: a segment
-    for points in clouds:
-        expected = _monotone_chain(np.unique(points, axis=0))
-        np.testing.assert_array_equal(convex_hull(points), expected)
-    # it does drop: only a few of 3000 normal points can lie on the hull
-    assert len(_drop_interior(clouds[0])) < 300
-    assert len(_drop_interior(clouds[2])) == 500  # nothing strictly inside
+    for points in clouds[:3]:
+        hull = _core.perception.convex_hull(points)
+        assert len(hull) >= 3
+        assert all((points == vertex).all(axis=1).any() for vertex in hull)
+        a, b, c = hull, np.roll(hull, -1, axis=0), np.roll(hull, -2, axis=0)
+        turns = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+        assert (turns > 0).all()
+        edge = b - a
+        cross = edge[:, 0] * (points[:, None, 1] - a[:, 1]) - edge[:, 1] * (points[:, None, 0] - a[:, 0])
+        assert (cross >= -1e-9 * np.abs(points).max() ** 2).all()
+    assert len(_core.perception.convex_hull(clouds[2])) == 500  # every point a vertex
+    assert len(_core.perception.convex_hull(clouds[1])) <= 8  # a lattice: corners only
+    np.testing.assert_array_equal(_core.perception.convex_hull(clouds[3]), [[0, 0], [10, 0]])
+
+
+def test_masks_from_boxes_reject_bad_input():
+    points, P = np.zeros((10, 3)), np.hstack([np.eye(3), np.zeros((3, 1))])
+    boxes, ids = np.zeros((1, 7)), np.ones(1, np.int32)
+    masks = _core.perception.masks_from_boxes
+    with pytest.raises(ValueError, match="boxes"):
+        masks(points, np.zeros((1, 6)), ids, ids, P, 10, 10)
+    with pytest.raises(ValueError, match="class_ids"):
+        masks(points, boxes, np.ones(2, np.int32), ids, P, 10, 10)
+    with pytest.raises(ValueError, match="points"):
+        masks(np.zeros((10, 2)), boxes, ids, ids, P, 10, 10)
+    with pytest.raises(ValueError, match="image size"):
+        masks(points, boxes, ids, ids, P, 0, 10)
+    with pytest.raises(ValueError, match="road_cell_m"):
+        masks(points, boxes, ids, ids, P, 10, 10, road_cell_m=0.0)
+    # NaN points and a degenerate box are ignored, not an error: no plane, no mask
+    cls, inst, plane = masks(np.full((10, 3), np.nan), boxes, ids, ids, P, 10, 10)
+    assert plane is None and not cls.any() and not inst.any()
 
 
 def test_sim_masks_from_boxes_match_the_exact_car_pixels(sim_sequence):

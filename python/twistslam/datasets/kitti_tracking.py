@@ -37,7 +37,7 @@ from .objects import ObjectTable
 from .oxts import read_oxts_poses
 from .poses import read_poses
 from .tracks import ObjectTrack, object_tracks
-from .sensors import MissingDataWarning, read_image, read_timestamps, read_velodyne
+from .sensors import MissingDataWarning, read_image, read_timestamps, read_velodyne, scan_in_camera
 
 log = logging.getLogger(__name__)
 
@@ -47,16 +47,6 @@ FRAME_PERIOD = 0.1  # s, KITTI records at 10 Hz
 #: 0001: -0.63 px on both, against -0.1..-0.5 px varying with range on the road without it)
 KITTI_VERTICAL_OFFSET_DEG = 0.205
 _SENSORS = {"image_02": ".png", "image_03": ".png", "velodyne": ".bin"}
-
-
-def _corrected_scan(points_velo: np.ndarray, angle_deg: float) -> np.ndarray:
-    """The scan with every return's elevation raised by ``angle_deg`` (intensity kept)."""
-    from twistslam._core import lidar as _lidar
-
-    xyz = _lidar.correct_kitti_scan(points_velo[:, :3].astype(np.float64), angle_deg=angle_deg)
-    out = points_velo.copy()
-    out[:, :3] = xyz
-    return out
 
 
 class KittiTracking:
@@ -225,15 +215,9 @@ class KittiTracking:
         velo = self._sensor_file("velodyne", i) if lidar else None
         points_velo = points_c = None
         if velo is not None:
-            points_velo = read_velodyne(velo)
-            if self.lidar_vertical_offset_deg != 0.0:
-                points_velo = _corrected_scan(points_velo, self.lidar_vertical_offset_deg)
             # X_c = R_rect Tr_velo_cam X_velo (docs/design.md); intensity carried along
-            T = self.calib.T_c_velo
-            # einsum, not `@`: threaded BLAS takes ~130 ms for this (N, 3) x (3, 3) product on
-            # a busy 2-core machine, einsum ~2 ms
-            xyz = np.einsum("ij,kj->ik", points_velo[:, :3].astype(np.float64), T[:3, :3]) + T[:3, 3]
-            points_c = np.hstack([xyz, points_velo[:, 3:4]]).astype(np.float32)
+            points_velo, points_c = scan_in_camera(read_velodyne(velo), self.calib.T_c_velo,
+                                                   self.lidar_vertical_offset_deg)
         poses, objects = self.gt_poses, self.gt_objects
         return Frame(
             index=i,

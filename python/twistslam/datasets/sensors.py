@@ -111,3 +111,14 @@ def read_timestamps(path: PathLike) -> np.ndarray:
             raise parse_error(path, line_no, f"expected 1 value (seconds), got {len(tokens)}")
         times.append(to_floats(tokens, path, line_no, "timestamp")[0])
     return np.array(times, dtype=np.float64)
+
+
+def scan_in_camera(points_velo: np.ndarray, T_c_velo: np.ndarray,
+                   angle_deg: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """``(points_velo, points_c)``: the scan (N, C >= 3) with every return's elevation raised by
+    ``angle_deg`` (KITTI's HDL-64 correction; intensity kept), and the same rows with (x, y, z)
+    in the camera frame, ``X_c = T_c_velo X_velo``; both float32. One C++ pass (the numpy
+    version took ~15 ms of a real KITTI frame's loading)."""
+    from twistslam._core import lidar as _lidar
+
+    return _lidar.scan_to_camera(points_velo, T_c_velo, angle_deg=angle_deg)

@@ -1,6 +1,7 @@
 """Panoptic labels without network weights: instance masks from 3D boxes, road from LiDAR.
 
-What runs on real KITTI here. For each box of the frame (from a detection file, or from the
+What runs on real KITTI here; the work is done in the C++ core (``cpp/perception/box_masks``,
+a few milliseconds per KITTI frame where numpy took 35-55 ms). For each box of the frame (from a detection file, or from the
 run's detector on this frame) the LiDAR points inside the box, minus the ground under it, are projected into
 the left image (``P2``) and their 2D convex hull is filled; boxes are drawn far to near so a
 nearer object covers a farther one. Road: a RANSAC plane through the low points; the points
@@ -11,16 +12,13 @@ projected points alone leaves gaps). Everything else is unknown, hence static.
 
 from __future__ import annotations
 
-import functools
-
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from twistslam import _core
 from twistslam.datasets import DONT_CARE, ObjectTable
-from twistslam.geometry import fit_plane_ransac
 
-from .hull_fill import fill_convex_hull
 from .panoptic import CAR, PERSON, ROAD, UNKNOWN, Panoptic
 
 #: KITTI object classes -> Cityscapes ids (Cityscapes has no van: a van is a car);
@@ -74,71 +72,13 @@ class BoxMaskConfig:
 DETECTOR_MASK_MIN_SCORE: dict[str, float | None] = {"classical": 0.1}
 
 
-def points_in_box(points: np.ndarray, box: np.ndarray) -> np.ndarray:
-    """(N,) bool: ``points`` (N, 3, camera frame) inside ``box`` ``[cx cy cz l w h ry]``."""
-    c, (l, w, h), ry = box[:3], box[3:6], box[6]
-    d = points - c
-    cos, sin = np.cos(ry), np.sin(ry)
-    # into the box frame: R_y(ry)^T d (object x = length, y = height, z = width)
-    x = cos * d[:, 0] - sin * d[:, 2]
-    z = sin * d[:, 0] + cos * d[:, 2]
-    return (np.abs(x) <= l / 2) & (np.abs(d[:, 1]) <= h / 2) & (np.abs(z) <= w / 2)
-
-
 def ground_plane(points: np.ndarray, config: BoxMaskConfig) -> np.ndarray | None:
     """Plane ``[n, d]`` (``n . X + d = 0``, ``n`` pointing up, i.e. towards -y) through the
-    low points, or ``None`` when there are too few of them."""
-    low = points[points[:, 1] > config.low_point_below_camera_m]
-    if len(low) < 3:
-        return None
-    plane = np.asarray(fit_plane_ransac(low, config.plane_fit_threshold_m).plane, float)
-    return -plane if plane[1] > 0 else plane
-
-
-@functools.lru_cache(maxsize=4)
-def _pixel_rays_cached(P_bytes: bytes, H: int, W: int) -> tuple[np.ndarray, np.ndarray]:
-    P = np.frombuffer(P_bytes, dtype=np.float64).reshape(3, 4)
-    M = P[:, :3]
-    centre = -np.linalg.solve(M, P[:, 3])
-    v, u = np.mgrid[0:H, 0:W]
-    rays = np.linalg.solve(M, np.stack([u.ravel() + 0.5, v.ravel() + 0.5, np.ones(H * W)]))
-    return centre, np.ascontiguousarray(rays.T)
-
-
-def _pixel_rays(P: np.ndarray, H: int, W: int) -> tuple[np.ndarray, np.ndarray]:
-    """Camera centre and the (H*W, 3) ray of every pixel centre: the same for every frame of
-    a sequence, so computed once (it was a third of the time of a frame's masks)."""
-    return _pixel_rays_cached(np.ascontiguousarray(P, dtype=np.float64).tobytes(), H, W)
-
-
-def road_mask(points: np.ndarray, plane: np.ndarray, P: np.ndarray, shape: tuple[int, int],
-              config: BoxMaskConfig) -> np.ndarray:
-    """(H, W) bool: pixels whose ray meets the plane in a bird's-eye cell holding a ground
-    point (see the module docstring)."""
-    H, W = shape
-    cell, reach = config.road_cell_m, config.road_max_range_m
-    ground = points[np.abs(points @ plane[:3] + plane[3]) < config.ground_band_m]
-    n = int(np.ceil(2 * reach / cell))
-    grid = np.zeros((n, n), bool)  # rows: z in [0, 2 reach), columns: x in [-reach, reach)
-    gx = np.floor((ground[:, 0] + reach) / cell).astype(int)
-    gz = np.floor(ground[:, 2] / cell).astype(int)
-    keep = (gx >= 0) & (gx < n) & (gz >= 0) & (gz < n)
-    grid[gz[keep], gx[keep]] = True
-    for _ in range(config.road_dilation_cells):
-        grown = grid.copy()
-        grown[1:] |= grid[:-1]; grown[:-1] |= grid[1:]
-        grown[:, 1:] |= grid[:, :-1]; grown[:, :-1] |= grid[:, 1:]
-        grid = grown
-    centre, rays = _pixel_rays(P, H, W)
-    along = rays @ plane[:3]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = -(centre @ plane[:3] + plane[3]) / along
-    cx = np.floor((centre[0] + s * rays[:, 0] + reach) / cell)
-    cz = np.floor((centre[2] + s * rays[:, 2]) / cell)
-    ok = (s > 0) & np.isfinite(s) & (cx >= 0) & (cx < n) & (cz >= 0) & (cz < n)
-    road = np.zeros(H * W, bool)
-    road[ok] = grid[cz[ok].astype(int), cx[ok].astype(int)]
-    return road.reshape(H, W)
+    low points of ``points`` (N, >=3, camera frame), or ``None`` when there are too few."""
+    return _core.perception.ground_plane(
+        np.asarray(points, dtype=np.float64)[:, :3],
+        low_point_below_camera_m=config.low_point_below_camera_m,
+        plane_fit_threshold_m=config.plane_fit_threshold_m)
 
 
 def panoptic_from_boxes(points_c: np.ndarray, boxes: ObjectTable, P: np.ndarray,
@@ -148,38 +88,23 @@ def panoptic_from_boxes(points_c: np.ndarray, boxes: ObjectTable, P: np.ndarray,
 
     Parameters
     ----------
-    points_c : (N, >=3) LiDAR points in the rectified camera frame.
-    boxes : this frame's boxes; instance id of row ``k`` is ``k + 1`` (DontCare rows skipped).
+    points_c : (N, >=3) LiDAR points in the rectified camera frame (rows with NaN ignored).
+    boxes : this frame's boxes; instance id of row ``k`` is ``k + 1`` (DontCare rows, and rows
+        scored below ``config.min_score``, skipped).
     P : (3, 4) projection of the left image (``calib.P2``).
     shape : (H, W) of the left image.
     """
-    points = np.asarray(points_c, dtype=np.float64)[:, :3]
-    points = points[np.isfinite(points).all(axis=1)]
-    class_id = np.full(shape, UNKNOWN, np.int32)
-    instance_id = np.zeros(shape, np.int32)
-    plane = ground_plane(points, config)
-    above = np.ones(len(points), bool)
-    if plane is not None:
-        class_id[road_mask(points, plane, P, shape, config)] = ROAD
-        above = points @ plane[:3] + plane[3] > config.hull_ground_clearance_m
-    in_front = points[:, 2] > 0.1  # m: a point at or behind the camera has no pixel
-    candidates = points[above & in_front]
-    candidates = candidates[np.argsort(candidates[:, 2], kind="stable")]  # by depth
-    for k in np.argsort(-boxes.box_3d[:, 2], kind="stable"):  # far to near
-        if boxes.cls[k] == DONT_CARE or (config.min_score is not None
-                                         and boxes.score[k] < config.min_score):
-            continue
-        box = boxes.box_3d[k]
-        reach = 0.5 * float(np.linalg.norm(box[3:6]))  # no point of the box is farther
-        lo, hi = np.searchsorted(candidates[:, 2], [box[2] - reach, box[2] + reach])
-        near = candidates[lo:hi]
-        inside = near[points_in_box(near, box)]
-        if len(inside) < config.min_box_points:
-            continue
-        uvw = inside @ P[:, :3].T + P[:, 3]
-        mask = fill_convex_hull(uvw[:, :2] / uvw[:, 2:3], shape)
-        class_id[mask] = KITTI_TO_CITYSCAPES.get(str(boxes.cls[k]), UNKNOWN)
-        instance_id[mask] = k + 1
+    use = boxes.cls != DONT_CARE
+    if config.min_score is not None:
+        use &= boxes.score >= config.min_score
+    rows = np.flatnonzero(use)
+    class_ids = np.array([KITTI_TO_CITYSCAPES.get(str(c), UNKNOWN) for c in boxes.cls[rows]],
+                         dtype=np.int32)
+    options = {k: v for k, v in asdict(config).items() if k != "min_score"}
+    class_id, instance_id, _ = _core.perception.masks_from_boxes(
+        np.asarray(points_c, dtype=np.float64)[:, :3], boxes.box_3d[rows].reshape(-1, 7),
+        class_ids, (rows + 1).astype(np.int32), P, int(shape[0]), int(shape[1]),
+        unknown_id=UNKNOWN, road_id=ROAD, **options)
     return Panoptic(class_id, instance_id, source="boxes")
 
 

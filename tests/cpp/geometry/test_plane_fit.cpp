@@ -94,3 +94,27 @@ TEST(PlaneFit, StoppingHopelessSamplesEarlyKeepsTheExhaustiveResult) {
   EXPECT_EQ(fit.num_inliers, static_cast<int>(inliers_of(plane).size()));
   EXPECT_GT(fit.num_inliers, 2000);  // the road half within 0.05 m: ~90 % at 3 cm noise
 }
+
+TEST(PlaneFit, ScoringAStridedSubsetFindsThePlaneOfAllPoints) {
+  // 40k road points (2 cm noise) and 30 % clutter above it: hypotheses scored on 2000 points
+  // give the plane of the exhaustive fit, as the refits use every point
+  const Vec3 n = Vec3(0.0, -std::cos(0.02), std::sin(0.02));
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::uniform_real_distribution<double> u(-20.0, 20.0);
+  const int road = 40000, clutter = 17000;
+  Points3 P(road + clutter, 3);
+  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  for (int i = 0; i < road + clutter; ++i) {
+    const double lift = i < road ? noise(rng) : 0.3 + std::abs(u(rng)) * 0.1;
+    P.row(i) = (-1.65 * n + u(rng) * e1 + u(rng) * e2 + lift * n).transpose();
+  }
+  PlaneFitOptions all{0.06, 200, 0}, strided{0.06, 200, 0};
+  strided.max_scored_points = 2000;
+  const PlaneFit a = fit_plane_ransac(P, all), b = fit_plane_ransac(P, strided);
+  EXPECT_GT(b.plane.head<3>().dot(n), 0.99999);
+  EXPECT_NEAR(b.plane.w(), 1.65, 0.005);
+  EXPECT_GT(a.plane.head<3>().dot(b.plane.head<3>()), 0.999999);
+  EXPECT_NEAR(a.plane.w(), b.plane.w(), 0.002);
+  EXPECT_NEAR(b.num_inliers, a.num_inliers, 0.002 * road);
+}
