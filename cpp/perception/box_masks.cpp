@@ -63,7 +63,7 @@ void mark_road(const Points3& points, const Vec4& plane, const Mat34& P, const B
     // the ray is affine in u along a row: ray(u) = r0 + (u + 0.5) * du. Where both ends of the
     // row hit the plane, the hit's z is monotone in between (a ratio of affine functions whose
     // denominator keeps its sign): rows beyond the grid at both ends, or above the horizon at
-    // both ends, have no road pixel (two thirds of a KITTI image's rows)
+    // both ends, have no road pixel (203 of real KITTI 0001's 375 rows)
     const Vec3 r0 = M_inv * Vec3(0, v + 0.5, 1);
     const double z_first = hit_z(r0 + 0.5 * du), z_last = hit_z(r0 + (out->width - 0.5) * du);
     if (z_first >= n * cell && z_last >= n * cell) continue;
