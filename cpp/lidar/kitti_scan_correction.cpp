@@ -49,7 +49,11 @@ void scan_to_camera(const Eigen::Ref<const ScanRows>& points_velo, const Mat4& T
     float* v = velo.data() + i * velo.outerStride();
     float* x = camera.data() + i * camera.outerStride();
     Vec3 p(in[0], in[1], in[2]);
-    if (angle != 0) p = raised(p, c, s);
+    if (angle != 0) {
+      // the corrected point as stored (float), so that the camera frame's point is exactly
+      // the transform of the velo output
+      p = raised(p, c, s).cast<float>().cast<double>();
+    }
     const Vec3 q = R * p + t;
     for (int k = 0; k < 3; ++k) {
       v[k] = static_cast<float>(p[k]);
