@@ -252,24 +252,7 @@ void ObjectTracker::recenter(int c) {
 
 void ObjectTracker::cull(objects::ObjectCluster& cluster) const {
   auto& pts = cluster.points;
-  // Points farther than max_point_spread_m x kCullSpreadFactor from the cluster's median go
-  // too: the window's refinement can carry a far, weakly constrained point (a near-zero
-  // disparity) tens of metres off, and a cluster of such points still fits a twist. Measured
-  // on crowded seed 5: a "car" 292 m long, its median 3.2 m behind the car it followed,
-  // reported for 17 frames (a ghost track). Not max_point_spread_m itself: a far car's points
-  // scatter by metres in depth (2 m at 57 m for 0.25 px), and culling them at 4 m lost two
-  // far cars' clusters in their first frames (urban seed 5, two ghosts more)
-  constexpr double kCullSpreadFactor = 3;
-  Vec3 centre = Vec3::Zero();
-  const bool spread_check = pts.size() >= 3;
-  if (spread_check) {
-    std::vector<Vec3> all;
-    all.reserve(pts.size());
-    for (const auto& p : pts) all.push_back(p.X_o);
-    centre = median_point(std::move(all));
-  }
   const auto keep_end = std::stable_partition(pts.begin(), pts.end(), [&](const objects::ObjectPoint& p) {
-    if (spread_check && (p.X_o - centre).norm() > kCullSpreadFactor * options_.max_point_spread_m) return false;
     return !(p.visible >= options_.cull_after_visible && p.found_ratio() < options_.min_found_ratio);
   });
   std::vector<objects::ObjectPoint> culled(std::make_move_iterator(keep_end),
