@@ -8,6 +8,16 @@
 using namespace twistslam;
 using namespace twistslam::geometry;
 
+namespace {
+
+// The point at in-plane coordinates (a, b) of the plane n.X + d = 0, lifted along n.
+Vec3 point_on_plane(const Vec3& n, double d, double a, double b, double lift) {
+  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  return -d * n + a * e1 + b * e2 + lift * n;
+}
+
+}  // namespace
+
 TEST(PlaneFit, RecoversRoadPlaneWithOutliers) {
   // Road 1.65 m below the camera (y down), tilted 2 degrees, 2 cm noise, 40 % outliers.
   const Vec3 n = Vec3(0.0, -std::cos(0.035), std::sin(0.035));
@@ -17,9 +27,10 @@ TEST(PlaneFit, RecoversRoadPlaneWithOutliers) {
   std::uniform_real_distribution<double> u(-20.0, 20.0);
   const int inliers = 600, outliers = 400;
   Points3 P(inliers + outliers, 3);
-  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
-  for (int i = 0; i < inliers; ++i)
-    P.row(i) = (-d * n + u(rng) * e1 + u(rng) * e2 + noise(rng) * n).transpose();
+  for (int i = 0; i < inliers; ++i) {
+    const double a = u(rng), b = u(rng);
+    P.row(i) = point_on_plane(n, d, a, b, noise(rng)).transpose();
+  }
   for (int i = inliers; i < inliers + outliers; ++i) P.row(i) = Vec3(u(rng), u(rng) * 0.2 - 3, u(rng) + 25).transpose();
 
   const PlaneFit fit = fit_plane_ransac(P, {0.06, 300, 0});
@@ -104,10 +115,10 @@ TEST(PlaneFit, ScoringAStridedSubsetFindsThePlaneOfAllPoints) {
   std::uniform_real_distribution<double> u(-20.0, 20.0);
   const int road = 40000, clutter = 17000;
   Points3 P(road + clutter, 3);
-  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
   for (int i = 0; i < road + clutter; ++i) {
     const double lift = i < road ? noise(rng) : 0.3 + std::abs(u(rng)) * 0.1;
-    P.row(i) = (-1.65 * n + u(rng) * e1 + u(rng) * e2 + lift * n).transpose();
+    const double a = u(rng), b = u(rng);
+    P.row(i) = point_on_plane(n, 1.65, a, b, lift).transpose();
   }
   PlaneFitOptions all{0.06, 200, 0}, strided{0.06, 200, 0};
   strided.max_scored_points = 2000;
