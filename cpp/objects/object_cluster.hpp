@@ -20,6 +20,9 @@ struct ObjectPointObservation {
 
 struct ObjectPoint {
   Vec3 X_o = Vec3::Zero();  // in the object frame (moves with the object)
+  // where it joined its cluster (same frame, re-expressed with X_o): windows may refine X_o
+  // within a fraction of its depth of this place (ObjectTrackingOptions)
+  Vec3 X_o_placed = Vec3::Zero();
   map::Descriptor descriptor{};
   ObjectPointObservation last;  // the latest observation (flow-guided search starts here)
   std::vector<ObjectPointObservation> history;  // the latest ones, oldest first (window BA)

@@ -32,8 +32,9 @@ void ObjectTracker::make_canonical(int c, const Mat4& T_w_box) {
   const Mat4 T_new_o = geometry::se3_inverse(T_o_new);
   for (objects::TrackFrame& row : track.frames) row.T_w_o = row.T_w_o * T_o_new;
   for (objects::TrackFrame& row : track.backcast) row.T_w_o = row.T_w_o * T_o_new;
-  for (objects::ObjectPoint& p : clusters_[c].points) p.X_o = transform(T_new_o, p.X_o);
-  for (objects::ObjectPoint& p : clusters_[c].retired) p.X_o = transform(T_new_o, p.X_o);
+  for (auto* points : {&clusters_[c].points, &clusters_[c].retired})
+    for (objects::ObjectPoint& p : *points)
+      p.X_o = transform(T_new_o, p.X_o), p.X_o_placed = transform(T_new_o, p.X_o_placed);
   track.travel.rotate(T_o_new.topLeftCorner<3, 3>());
   track.canonical = true;
 }

@@ -133,7 +133,7 @@ bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points
 void ObjectTracker::append_point(objects::ObjectCluster& cluster, int c, const Frame& frame, int k,
                                  const Vec3& X_o) {
   objects::ObjectPoint p;
-  p.X_o = X_o;
+  p.X_o = p.X_o_placed = X_o;
   p.descriptor = frame.keypoints.descriptors[k];
   observe(p, {frame.index, frame.keypoints.uv[k], frame.keypoints.u_right[k], frame.keypoints.octave[k]},
           options_.window_frames, options_.final_smoothing);
@@ -246,8 +246,8 @@ void ObjectTracker::recenter(int c) {
   // left (T_w_o(i+1) = exp(Pi xi) T_w_o(i)), so they are unchanged
   for (objects::TrackFrame& row : tracks_[c].frames)
     row.T_w_o.topRightCorner<3, 1>() += row.T_w_o.topLeftCorner<3, 3>() * centre;
-  for (objects::ObjectPoint& p : cluster.points) p.X_o -= centre;
-  for (objects::ObjectPoint& p : cluster.retired) p.X_o -= centre;
+  for (objects::ObjectPoint& p : cluster.points) p.X_o -= centre, p.X_o_placed -= centre;
+  for (objects::ObjectPoint& p : cluster.retired) p.X_o -= centre, p.X_o_placed -= centre;
 }
 
 void ObjectTracker::cull(objects::ObjectCluster& cluster) const {

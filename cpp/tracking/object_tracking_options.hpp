@@ -54,6 +54,9 @@ struct ObjectTrackingOptions {
   // a cluster never tracked since its birth reports its re-seeded rows only this near (m)
   double untracked_report_max_depth_m = 45;
   double max_point_spread_m = 4.0;  // new points farther from the cluster median are dropped
+  // a window moving a point farther than this fraction of its depth from where it joined the
+  // cluster leaves it, and it is culled (tracks without a canonical frame)
+  double window_max_point_move_depth_ratio = 0.5;
   double max_depth_m = 60;          // stereo points farther than this never join a cluster
   int max_points = 600;             // per cluster; the least often found are dropped first
   double min_found_ratio = 0.25;    // points matched in fewer of the frames predicting them
@@ -135,6 +138,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("reseed_after_misses", o.reseed_after_misses, 0, 100000);
   visit("untracked_report_max_depth_m", o.untracked_report_max_depth_m, 0.0, 10000.0);
   visit("max_point_spread_m", o.max_point_spread_m, 0.1, 1000.0);
+  visit("window_max_point_move_depth_ratio", o.window_max_point_move_depth_ratio, 0.01, 1e6);
   visit("max_depth_m", o.max_depth_m, 0.5, 10000.0);
   visit("max_points", o.max_points, 3, 1000000);
   visit("min_found_ratio", o.min_found_ratio, 0.0, 1.0);

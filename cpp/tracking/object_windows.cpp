@@ -4,10 +4,12 @@
 // track with every observation its points made. Both build the same
 // optim::VisualObjectWindow (optim/visual_object_window.hpp) from the track's rows.
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <vector>
 
 #include "geometry/se3.hpp"
+#include "tracking/object_point_helpers.hpp"
 #include "tracking/object_tracker.hpp"
 
 namespace twistslam::tracking {
@@ -189,8 +191,24 @@ bool ObjectTracker::take_window(int c, int first, const optim::VisualObjectWindo
   for (int r = 0; r + 1 < rows; ++r)  // eq. 2: the twist linking consecutive poses
     track.frames[first + r].xi = track.Pi * geometry::twist_between(w.T_w_o[r], w.T_w_o[r + 1]);
   cluster.velocity = track.frames[first + rows - 2].xi;
+  // A point a window moves farther than window_max_point_move_depth_ratio of its depth from
+  // where it joined the cluster is no point of the object: it keeps its place and the next
+  // cull drops it. A stereo depth is good to a few percent; such points were free along their
+  // rays (depth-filled mask pixels seen in the left image only, an object moving along the
+  // line of sight leaving no parallax) or matched on a surface behind the object, and ran to
+  // hundreds of metres, window after window (crowded seeds: camera-only boxes 49-1600 m long,
+  // a ghost's origin 3 m beyond its car). From where it joined, not from the last window: a
+  // limit per window let a point creep away by steps. Not for a canonical track: its boxes
+  // place it, and culling there cost the classical row RPE_r (0.147 -> 0.156 deg/m)
+  const Mat4 T_c_o_last = w.T_c_w[rows - 1] * w.T_w_o[rows - 1];
   for (size_t k = 0; k < used.size(); ++k) {
     objects::ObjectPoint& p = used[k] >= 0 ? cluster.points[used[k]] : cluster.retired[-1 - used[k]];
+    const double depth = std::abs(detail::transform(T_c_o_last, p.X_o_placed).z());
+    if (!track.canonical && (w.X_o[k] - p.X_o_placed).norm() > options_.window_max_point_move_depth_ratio * depth) {
+      p.found = 0;
+      p.visible = std::max(p.visible, options_.cull_after_visible);
+      continue;
+    }
     p.X_o = w.X_o[k];
   }
   return true;

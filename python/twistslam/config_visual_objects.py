@@ -152,6 +152,17 @@ class VisualObjectsConfig:
     max_point_spread_m: float = param(
         4.0, "new points farther than this from the cluster's median point are dropped "
         "(a car is <= 5.2 m long; masks bleed onto the background)", "m")
+    window_max_point_move_depth_ratio: float = param(
+        0.5, "a sliding window (or the final smoothing) that would move a point farther than "
+        "this fraction of its depth from where it joined the cluster does not move it, and the "
+        "point is culled: a stereo depth is good to a few percent, and such points (free along "
+        "their rays, or on a surface behind the object) ran to hundreds of metres (camera-only "
+        "boxes 49-1600 m long on crowded seeds). Measured on 16 simulated sequences (seeds "
+        "0-7): cars 69 -> 70 of 74, ghosts 5 -> 4, RPE_r 0.161 -> 0.148 deg/m; a limit per "
+        "window let points creep away by steps, and holding the points seen in the left image "
+        "only lost urban seed 7's lead car. Not for tracks with a canonical (box) frame: the "
+        "boxes place them, and the classical row's RPE_r went 0.147 -> 0.156 deg/m",
+        "fraction of depth")
     max_depth_m: float = param(
         60.0, "stereo points beyond this never join a cluster: at 60 m a KITTI disparity of "
         "6.5 px puts 1 px of error at 9 m of depth", "m")

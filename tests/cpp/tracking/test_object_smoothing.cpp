@@ -157,3 +157,69 @@ TEST_F(SmoothingScene, CulledPointsRetireWithTheirObservations) {
 }
 
 }  // namespace
+
+namespace {
+
+// A car driving slowly away along the line of sight, 8 of its 30 keypoints matched in stereo
+// and the rest mask pixels seen by the left camera only, at whole-pixel positions, their
+// depths filled from the stereo ones (tracking/stereo_depth_fill.hpp). Without parallax
+// nothing but the filled depth places such a point: windows free to move it along its ray
+// threw it 60-310 m deep on a few pixel roundings (ObjectTracker::take_window).
+struct PointRunawayScene : TrackerScene {};
+
+// The largest distance of a cluster point from the car's true body (its box, grown by 0.5 m),
+// in the car's frame, at the track's last frame.
+double farthest_from_body(const tracking::ObjectTracker& tracker, const Car& car, int frame) {
+  const Mat4 T_w_o = tracker.tracks()[0].frames.back().T_w_o;
+  const Mat4 T_car_w = geometry::se3_inverse(car.pose(frame));
+  const Vec3 half(2.0 + 0.5, 0.75 + 0.5, 0.9 + 0.5);
+  double farthest = 0;
+  for (const auto& p : tracker.clusters()[0].points) {
+    const Vec3 X_w = T_w_o.topLeftCorner<3, 3>() * p.X_o + T_w_o.topRightCorner<3, 1>();
+    const Vec3 X_car = T_car_w.topLeftCorner<3, 3>() * X_w + T_car_w.topRightCorner<3, 1>();
+    farthest = std::max(farthest, (X_car.cwiseAbs() - half).cwiseMax(0.0).norm());
+  }
+  return farthest;
+}
+
+TEST_F(PointRunawayScene, AWindowMayNotThrowAPointFarFromWhereItJoined) {
+  constexpr int kFrames = 25, kStereo = 8;
+  const Car car = make_car(rng, Vec3(-1, 0.5, 18), Vec3(0.0, 0, 0.05), 0.0, 30);
+  Car stereo = car, mono = car;
+  stereo.X_o.resize(kStereo);
+  stereo.descriptors.resize(kStereo);
+  mono.X_o.erase(mono.X_o.begin(), mono.X_o.begin() + kStereo);
+  mono.descriptors.erase(mono.descriptors.begin(), mono.descriptors.begin() + kStereo);
+  std::map<bool, double> farthest;
+  for (bool limited : {false, true}) {
+    tracking::ObjectTrackingOptions options;  // limited: the defaults
+    if (!limited) options.window_max_point_move_depth_ratio = 1e6;
+    auto tracker = make_tracker(options);
+    for (int i = 0; i < kFrames; ++i) {
+      SceneFrame f(i);
+      f.add_car(stereo, i, instance_id(i));
+      f.mono = f.round_uv = true;
+      f.add_car(mono, i, 0);  // inside the stereo points' mask rectangle
+      f.mono = f.round_uv = false;
+      f.add_background(background);
+      tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp);
+      if (i == 0) {
+        ASSERT_EQ(tracker.clusters().size(), 1u);
+        EXPECT_GT(tracker.clusters()[0].points.size(), size_t{kStereo}) << "depth-filled points joined";
+      }
+    }
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    farthest[limited] = farthest_from_body(tracker, car, kFrames - 1);
+    if (limited) {  // the track still follows the car
+      expect_motion(tracker.tracks()[0], car, 0);
+      const Mat4 err = geometry::se3_inverse(car.pose(kFrames - 1)) * tracker.tracks()[0].frames.back().T_w_o;
+      EXPECT_LT((err.topRightCorner<3, 1>().norm()), 3.0);  // the frame's origin: the points' centre
+    }
+  }
+  // measured: free, a point ends 53 m from the body (60-310 m deep during the run); limited,
+  // the runaways are culled and every point left lies within 0.5 m of it
+  EXPECT_GT(farthest[false], 20.0);
+  EXPECT_LT(farthest[true], 2.0);
+}
+
+}  // namespace

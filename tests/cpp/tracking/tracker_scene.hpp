@@ -86,6 +86,7 @@ struct SceneFrame {
   cv::Mat instances;  // CV_32SC1, 0 = none
   cv::Mat flow;       // CV_32FC2, NaN where unknown (filled at the car's keypoints)
   bool mono = false;  // keypoints without a stereo match (the right camera does not see them)
+  bool round_uv = false;  // keypoint positions rounded to whole pixels (mask pixels as keypoints)
   double stereo_depth_scale = 1.0;  // stereo depth of every keypoint times this (a disparity bias)
   // > 0 with noise_rng: Gaussian noise of every stereo match's right column (px), the depth
   // following the disparity (a real matcher's sub-pixel error)
@@ -102,8 +103,9 @@ struct SceneFrame {
 
   // Adds the stereo keypoint of X_c; false when it falls outside the image.
   bool add_point(const Vec3& X_c, const map::Descriptor& d, int label, int octave) {
-    const Vec2 uv = kCamera.project(X_c);
+    Vec2 uv = kCamera.project(X_c);
     if (X_c.z() <= 0.5 || !kCamera.in_image(uv, 1.0)) return false;
+    if (round_uv) uv = uv.array().round().matrix();
     auto& k = frame.keypoints;
     k.uv.push_back(uv);
     k.octave.push_back(octave);
