@@ -204,7 +204,8 @@ bool ObjectTracker::take_window(int c, int first, const optim::VisualObjectWindo
   for (size_t k = 0; k < used.size(); ++k) {
     objects::ObjectPoint& p = used[k] >= 0 ? cluster.points[used[k]] : cluster.retired[-1 - used[k]];
     const double depth = std::abs(detail::transform(T_c_o_last, p.X_o_placed).z());
-    if (!track.canonical && (w.X_o[k] - p.X_o_placed).norm() > options_.window_max_point_move_depth_ratio * depth) {
+    const double max_move = options_.window_max_point_move_depth_ratio * depth;
+    if (!track.canonical && (w.X_o[k] - p.X_o_placed).norm() > max_move) {
       p.found = 0;
       p.visible = std::max(p.visible, options_.cull_after_visible);
       continue;

@@ -4,6 +4,8 @@
 // freezes each row after window_frames frames, the smoothing lets every frame's observations
 // reach every row, so the frame-to-frame motion gets closer to the truth; the online poses
 // are kept; a track is smoothed once; with the option off nothing is archived or changed.
+// Both the windows and the smoothing take their refined points through
+// ObjectTracker::take_window, which refuses a point thrown far along its ray (last suite).
 #include <gtest/gtest.h>
 
 #include <map>
