@@ -391,6 +391,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   remember_unused_boxes(frame);
   for (int c = 0; c < static_cast<int>(tracks_.size()); ++c)
     if (tracks_[c].alive()) tracks_[c].class_id = clusters_[c].class_votes.best(tracks_[c].class_id);
+  hide_far_small_tracks(frame);  // after the class votes: this frame's class
   for (int owner : claimed_by_) report.num_points += owner >= 0;
   last_frame_ = frame.index;
   // the caller's images are this call's only: no view of them outlives it

@@ -181,6 +181,9 @@ class ObjectTracker : public ObjectBundleTerms {
   // A canonical track without a box this frame whose box the LiDAR sees through (returns
   // beyond it on rays crossing it, few inside) is not reported in it (object_free_space.cpp).
   void hide_see_through_tracks(const Frame& frame);
+  // A track of small_object_class_ids without a box this frame, farther than
+  // small_object_report_max_depth_m, is not reported in it (object_report_range.cpp).
+  void hide_far_small_tracks(const Frame& frame);
   // The frame's boxes no track took, kept for backfill_frames frames (object_backfill.cpp).
   void remember_unused_boxes(const Frame& frame);
   // A new canonical track c: the unused boxes of the frames before its first one that line up
