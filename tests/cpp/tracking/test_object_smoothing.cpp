@@ -3,7 +3,8 @@
 // in one problem. A far car whose stereo matches carry sub-pixel noise: the sliding window
 // freezes each row after window_frames frames, the smoothing lets every frame's observations
 // reach every row, so the frame-to-frame motion gets closer to the truth; the online poses
-// are kept; a track is smoothed once; with the option off nothing is archived or changed.
+// are kept; a track is smoothed once; a cluster never tracked keeps its rows; with the option
+// off nothing is archived or changed.
 // Both the windows and the smoothing take their refined points through
 // ObjectTracker::take_window, which refuses a point thrown far along its ray (last suite).
 #include <gtest/gtest.h>
@@ -96,6 +97,29 @@ TEST_F(SmoothingScene, FinalSmoothingBringsAFarCarsStepsCloserToTheTruthAndKeeps
     EXPECT_EQ(tracker.smooth_tracks(static_camera(kFrames)).num_tracks, 0);
     for (size_t r = 0; r < smoothed.size(); ++r) EXPECT_TRUE(track.frames[r].T_w_o == smoothed[r]);
   }
+}
+
+TEST_F(SmoothingScene, AClusterNeverTrackedKeepsItsRows) {
+  // a car whose keypoints change descriptors every frame: no point is found again, each frame
+  // re-seeds the cluster from its stereo points, the twist never succeeds (hits 1). Nothing
+  // links its rows but e_const: they stay as each frame's stereo placed them
+  Car car = make_car(rng, Vec3(1.0, 0.9, 30), Vec3(0.0, 0.0, -0.8), 0.0, 40);
+  auto tracker = make_tracker();
+  for (int i = 0; i < 8; ++i) {
+    for (auto& d : car.descriptors) d = test_scenes::random_descriptor(rng);
+    SceneFrame f(i);
+    f.add_car(car, i, instance_id(i));
+    f.add_background(background);
+    tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+  }
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const objects::ObjectTrack& track = tracker.tracks()[0];
+  ASSERT_EQ(track.frames.size(), 8u);
+  EXPECT_EQ(track.hits, 1);
+  const std::vector<Mat4> before = poses_of(track);
+  EXPECT_EQ(tracker.smooth_tracks(static_camera(8)).num_tracks, 0);
+  EXPECT_TRUE(track.T_w_o_online.empty());
+  for (size_t r = 0; r < before.size(); ++r) EXPECT_TRUE(track.frames[r].T_w_o == before[r]) << r;
 }
 
 TEST_F(SmoothingScene, WithoutFinalSmoothingNothingIsArchivedOrChanged) {
