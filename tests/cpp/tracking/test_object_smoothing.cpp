@@ -103,15 +103,9 @@ TEST_F(SmoothingScene, AClusterNeverTrackedKeepsItsRows) {
   // a car whose keypoints change descriptors every frame: no point is found again, each frame
   // re-seeds the cluster from its stereo points, the twist never succeeds (hits 1). Nothing
   // links its rows but e_const: they stay as each frame's stereo placed them
-  Car car = make_car(rng, Vec3(1.0, 0.9, 30), Vec3(0.0, 0.0, -0.8), 0.0, 40);
   auto tracker = make_tracker();
-  for (int i = 0; i < 8; ++i) {
-    for (auto& d : car.descriptors) d = test_scenes::random_descriptor(rng);
-    SceneFrame f(i);
-    f.add_car(car, i, instance_id(i));
-    f.add_background(background);
-    tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
-  }
+  run_reseeding_car(tracker, make_car(rng, Vec3(1.0, 0.9, 30), Vec3(0.0, 0.0, -0.8), 0.0, 40),
+                    background, 8, rng);
   ASSERT_EQ(tracker.tracks().size(), 1u);
   const objects::ObjectTrack& track = tracker.tracks()[0];
   ASSERT_EQ(track.frames.size(), 8u);

@@ -344,15 +344,9 @@ TEST_F(TrackerScene, AClusterNeverTrackedReportsItsReseededRowsOnlyWhenNear) {
   // again, so each frame re-seeds the cluster from its instance's stereo points (rows placed
   // by one frame's stereo alone, the cluster never tracked)
   auto run = [&](double depth, const tracking::ObjectTrackingOptions& options) {
-    Car car = make_car(rng, Vec3(1.0, 0.9, depth), Vec3::Zero(), 0.0, 40);
     auto tracker = make_tracker(options);
-    for (int i = 0; i < 6; ++i) {
-      for (auto& d : car.descriptors) d = test_scenes::random_descriptor(rng);
-      SceneFrame f(i);
-      f.add_car(car, i, instance_id(i));
-      f.add_background(background);
-      tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
-    }
+    run_reseeding_car(tracker, make_car(rng, Vec3(1.0, 0.9, depth), Vec3::Zero(), 0.0, 40),
+                      background, 6, rng);
     return tracker;
   };
   const tracking::ObjectTrackingOptions options;

@@ -212,4 +212,18 @@ void run_car(tracking::ObjectTracker& tracker, const Car& car, const Background&
   }
 }
 
+// A car whose keypoints take new descriptors every frame: no point is ever found again, so
+// each frame re-seeds its cluster from the instance's stereo points (the cluster never
+// tracked, each row one frame's stereo). Frames 0 .. frames - 1, no flow.
+void run_reseeding_car(tracking::ObjectTracker& tracker, Car car, const Background& background,
+                       int frames, std::mt19937& rng) {
+  for (int i = 0; i < frames; ++i) {
+    for (auto& d : car.descriptors) d = random_descriptor(rng);
+    SceneFrame f(i);
+    f.add_car(car, i, instance_id(i));
+    f.add_background(background);
+    tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+  }
+}
+
 }  // namespace
