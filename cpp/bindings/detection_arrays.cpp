@@ -5,12 +5,32 @@
 
 namespace twistslam::bindings {
 
+namespace {
+using BoolArray = py::array_t<bool, py::array::c_style | py::array::forcecast>;
+
+// flags (N,) bool, or an empty array for None; TypeError / ValueError naming `name`
+BoolArray optional_flags(const py::handle& flags, const char* name, py::ssize_t n) {
+  if (flags.is_none()) return BoolArray();
+  // booleans only: a cast would read any non-empty string or non-zero number as true
+  const py::array raw = py::array::ensure(flags);
+  if (!raw || raw.dtype().kind() != 'b')
+    throw py::type_error(std::string(name) + ": expected a boolean array, got " +
+                         (raw ? std::string(py::str(raw.dtype())) : std::string("no array")));
+  BoolArray out = BoolArray::ensure(raw);
+  if (out.ndim() != 1 || out.shape(0) != n)
+    throw py::value_error(std::string(name) + ": expected (" + std::to_string(n) +
+                          ",) like boxes, got " + shape_string(out));
+  return out;
+}
+}  // namespace
+
 std::vector<objects::Detection> detections_from_arrays(const py::handle& boxes,
                                                        const py::handle& scores,
                                                        const py::handle& class_ids,
                                                        const py::handle& planar,
                                                        const py::handle& open_ends,
-                                                       const py::handle& point_extents) {
+                                                       const py::handle& point_extents,
+                                                       const py::handle& headings_known) {
   const DoubleArray b = as_rows(boxes, "boxes", 7);
   const auto n = b.shape(0);
   const DoubleArray s = as_double_array(scores, "scores");
@@ -35,18 +55,8 @@ std::vector<objects::Detection> detections_from_arrays(const py::handle& boxes,
       throw py::value_error("open_ends: expected (" + std::to_string(n) + ",) like boxes, got " +
                             shape_string(ends));
   }
-  py::array_t<bool, py::array::c_style | py::array::forcecast> extents;
-  if (!point_extents.is_none()) {
-    // booleans only: a cast would read any non-empty string or non-zero number as true
-    const py::array raw = py::array::ensure(point_extents);
-    if (!raw || raw.dtype().kind() != 'b')
-      throw py::type_error("point_extents: expected a boolean array, got " +
-                           (raw ? std::string(py::str(raw.dtype())) : std::string("no array")));
-    extents = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(raw);
-    if (extents.ndim() != 1 || extents.shape(0) != n)
-      throw py::value_error("point_extents: expected (" + std::to_string(n) + ",) like boxes, got " +
-                            shape_string(extents));
-  }
+  const BoolArray extents = optional_flags(point_extents, "point_extents", n);
+  const BoolArray known = optional_flags(headings_known, "headings_known", n);
   std::vector<objects::Detection> dets(n);
   for (py::ssize_t i = 0; i < n; ++i) {
     dets[i].box = geometry::Box3D::from_row(b.data() + 7 * i);
@@ -54,6 +64,8 @@ std::vector<objects::Detection> detections_from_arrays(const py::handle& boxes,
     dets[i].class_id = static_cast<int>(c.data()[i]);
     dets[i].planar = planar.is_none() ? true : p.data()[i];
     dets[i].point_extent = point_extents.is_none() ? false : extents.data()[i];
+    // without the flags, a box knows its heading unless it is a point extent (mod pi)
+    dets[i].heading_known = headings_known.is_none() ? !dets[i].point_extent : known.data()[i];
     if (!open_ends.is_none()) {
       const std::int64_t e = ends.data()[i];
       if (e < -1 || e > 1)

@@ -60,6 +60,7 @@ py::dict run_detect(const py::handle& points_c, const py::object& options, const
   py::array_t<int> num_points(n);
   py::array_t<bool> length_seen(n);
   py::array_t<std::int8_t> open_end(n);
+  py::array_t<bool> heading_known(n);
   DoubleArray edge_distance = new_array({n});
   py::list classes;
   for (py::ssize_t i = 0; i < n; ++i) {
@@ -71,6 +72,7 @@ py::dict run_detect(const py::handle& points_c, const py::object& options, const
     num_points.mutable_data()[i] = det.num_points;
     length_seen.mutable_data()[i] = det.length_seen;
     open_end.mutable_data()[i] = static_cast<std::int8_t>(det.open_end);
+    heading_known.mutable_data()[i] = det.heading_known;
     edge_distance.mutable_data()[i] = det.edge_distance_m;
     classes.append(d::to_string(det.cls));
   }
@@ -78,7 +80,8 @@ py::dict run_detect(const py::handle& points_c, const py::object& options, const
                          "cluster_ms"_a = r.timings.cluster_ms, "fit_ms"_a = r.timings.fit_ms);
   return py::dict("boxes"_a = boxes, "scores"_a = scores, "classes"_a = classes,
                   "num_points"_a = num_points, "length_seen"_a = length_seen,
-                  "open_end"_a = open_end, "edge_distance_m"_a = edge_distance,
+                  "open_end"_a = open_end, "heading_known"_a = heading_known,
+                  "edge_distance_m"_a = edge_distance,
                   "num_non_finite"_a = r.num_non_finite,
                   "num_selected"_a = r.num_selected, "num_obstacle"_a = r.num_obstacle,
                   "num_clusters"_a = r.num_clusters, "timings"_a = timings);
@@ -104,12 +107,14 @@ Returns
 -------
 dict
     ``boxes`` (M, 7) float64 ``[x, y, z, l, w, h, yaw]`` geometric centre in frame c, KITTI
-    ``rotation_y`` in [-pi/2, pi/2); ``scores`` (M,) float64 in (0, 1]; ``classes`` list of M
+    ``rotation_y``: in [-pi, pi) pointing to the car's front where ``heading_known``, else
+    in [-pi/2, pi/2) (the fit knows it mod pi); ``scores`` (M,) float64 in (0, 1]; ``classes`` list of M
     KITTI type names (Car, Pedestrian, Cyclist); ``num_points`` (M,) int32 returns per box;
     ``length_seen`` (M,) bool, a car whose length was measured (an L-shape) rather than
     set by the ``car_length_m`` prior behind its visible face; ``open_end`` (M,) int8, for
     such a box the end (+1 the +x end along its heading, -1 the -x end) that the prior
-    extended past the seen face, else 0; ``edge_distance_m`` (M,) float64, the mean distance
+    extended past the seen face, else 0; ``heading_known`` (M,) bool, a car whose front
+    was told from the height profile of its returns (``front_from_profile``); ``edge_distance_m`` (M,) float64, the mean distance
     (m) of the box's footprint returns to the nearest edge of their fitted rectangle (a car's
     faces: a few cm; cars above ``car_max_edge_distance_m`` are not reported); sorted by
     decreasing score. Also ``num_non_finite``, ``num_selected``, ``num_obstacle``,

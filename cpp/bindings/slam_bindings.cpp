@@ -103,12 +103,12 @@ options : dict
               const py::object& labels, const py::object& points_c, const py::object& instances,
               const py::object& flow, const py::object& boxes, const py::object& scores,
               const py::object& class_ids, const py::object& open_ends,
-              const py::object& point_extents) {
+              const py::object& point_extents, const py::object& headings_known) {
              const cv::Mat l = image_view(left, "image_left", false);
              std::vector<objects::Detection> detections;
              if (!boxes.is_none())
                detections = detections_from_arrays(boxes, scores, class_ids, py::none(), open_ends,
-                                                   point_extents);
+                                                   point_extents, headings_known);
              Points3 scan;
              if (!points_c.is_none()) scan = points_view(as_rows(points_c, "points_c", 3));
              const cv::Mat r = image_view(right, "image_right", false);
@@ -143,7 +143,8 @@ options : dict
            "index"_a, "timestamp"_a, "image_left"_a, "image_right"_a, "labels"_a = py::none(),
            "points_c"_a = py::none(), "instances"_a = py::none(), "flow"_a = py::none(),
            "boxes"_a = py::none(), "scores"_a = py::none(), "class_ids"_a = py::none(),
-           "open_ends"_a = py::none(), "point_extents"_a = py::none(), R"doc(Track one stereo frame.
+           "open_ends"_a = py::none(), "point_extents"_a = py::none(),
+           "headings_known"_a = py::none(), R"doc(Track one stereo frame.
 
 Parameters
 ----------
@@ -176,6 +177,10 @@ point_extents : ndarray (N,) bool, optional
     Per box, true when it is the tight extent of its LiDAR points (the classical detector:
     ``Detections3D.point_extent``): its measured length is a lower bound and its end nearer
     the sensor the seen one; None: all false.
+headings_known : ndarray (N,) bool, optional
+    Per box, true when its yaw points to the object's front (``Detections3D.heading_known``):
+    only such boxes vote for a parked car's heading with their own; None: true where
+    ``point_extents`` is false.
 
 Returns
 -------

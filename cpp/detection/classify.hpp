@@ -18,7 +18,9 @@ const char* to_string(ObjectClass cls);
 struct Detection {
   Vec3 centre = Vec3::Zero();  // m, geometric centre (not KITTI's bottom centre)
   double length = 0, width = 0, height = 0;  // m, along the heading, across it, vertical
-  double yaw = 0;      // rad, KITTI rotation_y in [-pi/2, pi/2) (a LiDAR cannot tell front from back)
+  // rad, KITTI rotation_y: in [-pi, pi) pointing to the car's front if heading_known, else in
+  // [-pi/2, pi/2) (the L-shape fit knows it mod pi)
+  double yaw = 0;
   double score = 0;    // (0, 1]: point count x fit quality x share of the box seen
   ObjectClass cls = ObjectClass::kCar;
   int num_points = 0;  // obstacle returns of the cluster
@@ -29,6 +31,8 @@ struct Detection {
   // its -x end) that the prior extended past the seen face; 0 for a measured length. With a
   // car's true length known (other frames), the centre moves by (true - length) / 2 that way.
   int open_end = 0;
+  // cars with length_seen: the front was told from the height profile (front_profile.hpp)
+  bool heading_known = false;
   // m, mean distance of the footprint's returns to the nearest edge of their fitted
   // rectangle: a car's faces give a few cm, volumetric clutter (a bush, a hedge) tenths
   double edge_distance_m = 0;

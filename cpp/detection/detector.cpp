@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "detection/euclidean_clustering.hpp"
+#include "detection/front_profile.hpp"
 #include "detection/ground_removal.hpp"
 #include "detection/occlusion.hpp"
 #include "detection/scene_points.hpp"
@@ -55,6 +56,18 @@ std::vector<Detection> drop_car_pieces(std::vector<Detection> all) {
     if (!piece) kept.push_back(d);
   }
   return kept;
+}
+
+// The profile of a car's returns along its box's heading, for tell_front.
+std::vector<ProfilePoint> profile_of(const Detection& car, const ClusterShape& shape,
+                                     const std::vector<int>& members, const std::vector<ScenePoint>& pts) {
+  const double c = std::cos(car.yaw), s = std::sin(car.yaw);  // heading (c, -s) in (x, z)
+  std::vector<ProfilePoint> profile;
+  profile.reserve(members.size());
+  for (const int i : members)
+    profile.push_back({static_cast<float>((pts[i].x - car.centre.x()) * c - (pts[i].z - car.centre.z()) * s),
+                       static_cast<float>(pts[i].up - shape.road_up)});
+  return profile;
 }
 
 ClusterShape shape_of(const std::vector<int>& members, const std::vector<ScenePoint>& pts,
@@ -139,7 +152,11 @@ DetectorResult detect(const Eigen::Ref<const Points3>& points_c, const DetectorO
   std::vector<Detection> candidates;
   for (const std::vector<int>& members : clusters) {
     const ClusterShape shape = shape_of(members, scene.points, above, occlusion, options);
-    if (std::optional<Detection> d = classify(shape, options)) candidates.push_back(*d);
+    if (std::optional<Detection> d = classify(shape, options)) {
+      if (options.front_from_profile && d->cls == ObjectClass::kCar && d->length_seen)
+        tell_front(*d, shape, profile_of(*d, shape, members, scene.points), options);
+      candidates.push_back(*d);
+    }
   }
   out.detections = drop_car_pieces(std::move(candidates));
   if (options.front_only && selection_half_angle_deg(options) > options.fov_half_angle_deg) {

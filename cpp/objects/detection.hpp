@@ -16,6 +16,9 @@ struct Detection {
   // the box is the tight extent of its LiDAR points (the classical detector): a measured length
   // is a lower bound, and the box's end nearer the sensor is the seen one
   bool point_extent = false;
+  // the box's heading points to the object's front (a point extent knows it mod pi unless the
+  // detector told the front from the car's height profile)
+  bool heading_known = true;
 };
 
 }  // namespace twistslam::objects

@@ -145,8 +145,9 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
   detection_used_[d] = 1;
   const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
   Mat4 T_w_box = T_w_c * det.box.pose();
-  // the detector's heading, before it is aligned with the track's (a point extent's is mod pi)
-  const Vec3 detected_heading_w = det.point_extent ? Vec3::Zero() : Vec3(T_w_box.block<3, 1>(0, 0));
+  // the detector's heading, before it is aligned with the track's (a point extent's is mod pi
+  // unless the detector told the car's front)
+  const Vec3 detected_heading_w = det.heading_known ? Vec3(T_w_box.block<3, 1>(0, 0)) : Vec3::Zero();
   const Vec3 open_end_w = static_cast<double>(det.open_end) * T_w_box.block<3, 1>(0, 0);  // before any turn
   // a point extent that measured its length: its far end is the one away from the camera
   Vec3 far_end_w = Vec3::Zero();
@@ -188,7 +189,7 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
   row.T_w_o_detected = T_w_box;
   row.detected_heading_w = detected_heading_w;
   row.road_side_heading_w =
-      det.point_extent ? road_side_heading(T_w_c, T_w_box, lidar_options_) : Vec3::Zero();
+      det.heading_known ? Vec3::Zero() : road_side_heading(T_w_c, T_w_box, lidar_options_);
   row.detected_size = Vec3(det.box.length, det.box.width, det.box.height);
   row.open_end_w = open_end_w;
   row.far_end_w = far_end_w;

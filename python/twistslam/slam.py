@@ -49,15 +49,15 @@ class TrackedFrame:
 
 
 def _detection_arrays(detections: Detections3D) -> tuple[np.ndarray, ...]:
-    """Boxes, scores, panoptic class ids, open ends and point-extent flags of the detections
-    whose KITTI type has a panoptic class (``KITTI_TO_CITYSCAPES``)."""
+    """Boxes, scores, panoptic class ids, open ends, point-extent and heading-known flags of
+    the detections whose KITTI type has a panoptic class (``KITTI_TO_CITYSCAPES``)."""
     if not isinstance(detections, Detections3D):
         raise TypeError(f"detections: expected Detections3D, got {type(detections).__name__}")
     class_ids = np.array([KITTI_TO_CITYSCAPES.get(str(c), -1) for c in detections.classes],
                          dtype=np.int64)
     keep = class_ids >= 0
     return (detections.boxes[keep], detections.scores[keep], class_ids[keep],
-            detections.open_end[keep], detections.point_extent[keep])
+            detections.open_end[keep], detections.point_extent[keep], detections.heading_known[keep])
 
 
 def _new_system(camera, options: dict[str, Any]):
@@ -218,13 +218,13 @@ class Slam:
         if wanted and frame.points_c is not None:
             scan = np.asarray(frame.points_c)[:, :3]
 
-        boxes = scores = class_ids = open_ends = point_extents = None
+        boxes = scores = class_ids = open_ends = point_extents = headings_known = None
         if detections is not None:
-            boxes, scores, class_ids, open_ends, point_extents = _detection_arrays(detections)
+            boxes, scores, class_ids, open_ends, point_extents, headings_known = _detection_arrays(detections)
 
         start = time.perf_counter()
         out = system.track(i, float(frame.timestamp), left, right, labels, scan, instances, flow,
-                           boxes, scores, class_ids, open_ends, point_extents)
+                           boxes, scores, class_ids, open_ends, point_extents, headings_known)
         track_ms = (time.perf_counter() - start) * 1e3
 
         T_w_c = np.asarray(out["T_w_c"], dtype=np.float64).reshape(4, 4)

@@ -68,11 +68,12 @@ def test_detections_give_the_car_ahead_its_canonical_pose_and_size(sim):
 def test_detection_classes_map_to_the_panoptic_vocabulary():
     dets = Detections3D(np.tile([0.0, 1.0, 10.0, 4.0, 1.8, 1.5, 0.0], (3, 1)), [3.0, 2.0, 1.0],
                         ["Car", "Misc", "Van"], open_end=[1, 0, -1],
-                        point_extent=[True, False, False])
-    boxes, scores, class_ids, open_ends, point_extents = _detection_arrays(dets)
+                        point_extent=[True, False, False], heading_known=[True, True, False])
+    boxes, scores, class_ids, open_ends, point_extents, headings_known = _detection_arrays(dets)
     assert class_ids.tolist() == [26, 26] and scores.tolist() == [3.0, 1.0]
     assert boxes.shape == (2, 7) and open_ends.tolist() == [1, -1]
     assert point_extents.tolist() == [True, False]
+    assert headings_known.tolist() == [True, False]
     with pytest.raises(TypeError, match="Detections3D"):
         _detection_arrays(np.zeros((1, 7)))
 
@@ -117,3 +118,10 @@ def test_bad_open_ends_are_refused_at_the_slam_binding():
         with pytest.raises(error, match=message):
             system.track(0, 0.0, image, image, None, None, None, None, boxes, np.ones(1),
                          np.array([26]), np.zeros(1, np.int64), np.array(point_extents))
+    for headings_known, error, message in (
+            ([True, True], ValueError, r"headings_known: expected \(1,\)"),
+            ([1], TypeError, "headings_known: expected a boolean array")):
+        with pytest.raises(error, match=message):
+            system.track(0, 0.0, image, image, None, None, None, None, boxes, np.ones(1),
+                         np.array([26]), np.zeros(1, np.int64), np.ones(1, bool),
+                         np.array(headings_known))

@@ -51,7 +51,7 @@ class FakeSystem:
 
     def track(self, index, timestamp, image_left, image_right, labels, points_c=None,
               instances=None, flow=None, boxes=None, scores=None, class_ids=None,
-              open_ends=None, point_extents=None):
+              open_ends=None, point_extents=None, headings_known=None):
         self.calls.append(dict(index=index, timestamp=timestamp, shape=image_left.shape,
                                labels=None if labels is None else labels.copy(),
                                points_c=None if points_c is None else points_c.shape,
@@ -61,7 +61,9 @@ class FakeSystem:
                                class_ids=None if class_ids is None else np.array(class_ids),
                                open_ends=None if open_ends is None else np.array(open_ends),
                                point_extents=None if point_extents is None
-                               else np.array(point_extents)))
+                               else np.array(point_extents),
+                               headings_known=None if headings_known is None
+                               else np.array(headings_known)))
         blank = image_left.min() == image_left.max() or image_right.min() == image_right.max()
         if blank:
             status = "lost"

@@ -24,6 +24,16 @@ if TYPE_CHECKING:  # datasets imports nothing from perception: no cycle at run t
 DETECTION_KINDS = ("auto", "files", "classical", "3dssd")
 
 
+def _flags(name: str, value, default: np.ndarray) -> np.ndarray:
+    """``value`` as an (N,) bool array like ``default`` (``default`` itself when None)."""
+    if value is None:
+        return default
+    flags = np.asarray(value).reshape(-1)
+    if len(flags) != len(default) or flags.dtype.kind not in "bui":
+        raise ValueError(f"Detections3D: {name} must hold {len(default)} booleans, got {flags.tolist()}")
+    return flags.astype(bool)
+
+
 @dataclass
 class Detections3D:
     """The 3D boxes one frame's detector found.
@@ -47,6 +57,11 @@ class Detections3D:
         the LiDAR fusion then takes a car's length from an upper quantile of its boxes and
         lays each box from its near end (``lidar_objects.point_extent_length_quantile``).
         False (default; files, 3DSSD): the length is the detector's estimate.
+    heading_known : (N,) bool, optional. True: ``yaw``'s heading points to the object's front.
+        Default: where ``point_extent`` is False (files and 3DSSD know front from back; a box
+        around LiDAR points knows its heading mod pi). The classical detector sets it for the
+        cars whose front it told from their height profile; the LiDAR fusion lets only such
+        boxes vote for a parked car's heading with their own.
     """
 
     boxes: np.ndarray = field(default_factory=lambda: np.zeros((0, 7)))
@@ -54,6 +69,7 @@ class Detections3D:
     classes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=object))
     open_end: np.ndarray | None = None
     point_extent: np.ndarray | None = None
+    heading_known: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.boxes = np.asarray(self.boxes, dtype=np.float64).reshape(-1, 7)
@@ -72,13 +88,8 @@ class Detections3D:
             raise ValueError(f"Detections3D: open_end must hold {n} values in {{-1, 0, 1}}, "
                              f"got {open_end.tolist()}")
         self.open_end = open_end.astype(np.int8)
-        if self.point_extent is None:
-            self.point_extent = np.zeros(n, dtype=bool)
-        point_extent = np.asarray(self.point_extent).reshape(-1)
-        if len(point_extent) != n or point_extent.dtype.kind not in "bui":
-            raise ValueError(f"Detections3D: point_extent must hold {n} booleans, got "
-                             f"{point_extent.tolist()}")
-        self.point_extent = point_extent.astype(bool)
+        self.point_extent = _flags("point_extent", self.point_extent, np.zeros(n, dtype=bool))
+        self.heading_known = _flags("heading_known", self.heading_known, ~self.point_extent)
 
     def __len__(self) -> int:
         return len(self.boxes)
@@ -87,7 +98,7 @@ class Detections3D:
         """The detections picked by a boolean mask or an index array."""
         return Detections3D(self.boxes[mask_or_index], self.scores[mask_or_index],
                             self.classes[mask_or_index], self.open_end[mask_or_index],
-                            self.point_extent[mask_or_index])
+                            self.point_extent[mask_or_index], self.heading_known[mask_or_index])
 
     @classmethod
     def from_table(cls, table: "ObjectTable") -> "Detections3D":

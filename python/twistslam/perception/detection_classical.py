@@ -59,11 +59,12 @@ class ClassicalDetector:
         """Detections of a scan: (N, >=3) points in the rectified camera frame (extra columns
         such as intensity are ignored; NaN / Inf rows are skipped)."""
         out = _d.detect(points_c, self.options)
-        box_keys = ("boxes", "scores", "classes", "open_end")
+        box_keys = ("boxes", "scores", "classes", "open_end", "heading_known")
         self.last_stats = {k: v for k, v in out.items() if k not in box_keys}
         # every box is the rectangle around its cluster's points: a lower bound of the object
         return Detections3D(out["boxes"], out["scores"], np.asarray(out["classes"], dtype=object),
-                            out["open_end"], np.ones(len(out["boxes"]), dtype=bool))
+                            out["open_end"], np.ones(len(out["boxes"]), dtype=bool),
+                            out["heading_known"])
 
     def __call__(self, frame) -> Detections3D:
         if frame.points_c is None:

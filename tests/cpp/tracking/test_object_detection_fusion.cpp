@@ -88,6 +88,9 @@ struct Boxes {
   // point_extent says so to the tracker (Detection::point_extent)
   double far_end_shortfall_m = 0;
   bool point_extent = false;
+  // with point_extent, boxes from this frame on had their front told by the detector (their
+  // heading is their own, Detection::heading_known); -1: none, each knows it mod pi only
+  int front_told_from = -1;
   // a second car's box this far from the car's (none: zero), with no returns in the scan (a
   // parked car hidden behind this one, its few returns too few to vote on a mask)
   Vec3 decoy_offset = Vec3::Zero();
@@ -118,6 +121,7 @@ void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Back
         d.box.length -= shortfall;
         d.box.center -= 0.5 * shortfall * far_end;
         d.point_extent = boxes.point_extent;
+        d.heading_known = !boxes.point_extent || (boxes.front_told_from >= 0 && i >= boxes.front_told_from);
       }
       if (i >= boxes.quarter_from && i < boxes.quarter_to) {
         dets.back().box.yaw += M_PI / 2;
@@ -304,6 +308,30 @@ TEST_F(DetectionFusion, PointExtentBoxesDoNotVoteOnTheHeading) {
   ASSERT_EQ(tracker.tracks().size(), 1u);
   const Vec3 x_axis = tracker.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
   EXPECT_GT(x_axis.dot(car.pose(7).block<3, 1>(0, 0)), 0.99);
+}
+
+TEST_F(DetectionFusion, APointExtentCarWhoseFrontWasToldFacesIt) {
+  // parked across the camera's travel (no road-side vote): the first box, a rear view, knows
+  // its heading mod pi and faces backwards; the later ones, seen whole, had their front told
+  // from the car's height profile: they outvote it. Without the told fronts the first box's
+  // frame stays.
+  const Car car = make_car(rng, Vec3(-3, 0.5, 16), Vec3::Zero(), 0.0);
+  Boxes boxes;
+  boxes.first_yaw = M_PI;
+  boxes.far_end_shortfall_m = 0.01;
+  boxes.point_extent = true;
+  for (const int told_from : {1, -1}) {
+    boxes.front_told_from = told_from;
+    const auto tracker = track_one_car(car, boxes, 8);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    EXPECT_FALSE(tracker.tracks()[0].heading_from_motion);
+    const double facing = tracker.tracks()[0].last().T_w_o.block<3, 1>(0, 0).dot(car.pose(7).block<3, 1>(0, 0));
+    if (told_from >= 0) {
+      EXPECT_GT(facing, 0.99);
+    } else {
+      EXPECT_LT(facing, -0.99);
+    }
+  }
 }
 
 TEST_F(DetectionFusion, APointExtentParkedCarFacesItsRoadSidesTraffic) {
