@@ -227,6 +227,38 @@ def test_real_tracking_labels_against_themselves(kitti_tracking_lidar):
     assert all(c.ap_r40 == pytest.approx(100.0) for c in r.curves)
 
 
+def test_orientation_similarity_counts_a_turned_box_as_zero():
+    """AOS weights each true positive by (1 + cos(d alpha)) / 2: every box facing its label
+    gives AOS = AP; every box turned around (alpha + pi, an IoU unchanged) AOS 0; a quarter
+    turn 0.5 of the AP; an unknown angle (-10) no AOS."""
+    gt = _boxes([{"slot": k} for k in range(4)])
+    same = _boxes([{"slot": k, "score": 0.9 - 0.1 * k} for k in range(3)])
+
+    def aos_and_ap(dets):
+        r = evaluate_detections(gt, dets, classes=("Car",), metrics=("2d",), iou=0.7,
+                                difficulties=("moderate",))
+        return r.aos("Car", "moderate", 0.7), r.ap("Car", "moderate", "2d", 0.7)
+
+    aos, ap = aos_and_ap(same)
+    assert ap == pytest.approx(75.0) and aos == pytest.approx(ap)  # 3 of 4 found
+    turned = _boxes([{"slot": k, "score": 0.9 - 0.1 * k} for k in range(3)])
+    turned.alpha[:] = np.pi
+    aos, ap = aos_and_ap(turned)
+    assert ap == pytest.approx(75.0) and aos == pytest.approx(0.0, abs=1e-9)
+    quarter = _boxes([{"slot": k, "score": 0.9 - 0.1 * k} for k in range(3)])
+    quarter.alpha[:] = np.pi / 2
+    assert aos_and_ap(quarter)[0] == pytest.approx(37.5)
+    unknown = _boxes([{"slot": k, "score": 0.9 - 0.1 * k} for k in range(3)])
+    unknown.alpha[1] = -10.0
+    assert math.isnan(aos_and_ap(unknown)[0])
+
+
+def test_real_labels_give_aos_equal_to_ap(kitti_tracking_lidar):
+    labels = read_labels(kitti_tracking_lidar / "training" / "label_02" / "0001.txt")
+    r = evaluate_detections(labels, labels, classes=("Car",), metrics=("2d",))
+    assert r.aos("Car", "moderate", 0.7) == pytest.approx(100.0)
+
+
 def test_real_pointrcnn_detections_of_0001(kitti_tracking_lidar):
     """PointRCNN (Shi et al., CVPR 2019) reports about 78.6 % 3D AP (R11) for moderate cars
     at IoU 0.7 on KITTI val, where BEV AP is higher and IoU 0.5 leaves only the misses;
@@ -243,6 +275,8 @@ def test_real_pointrcnn_detections_of_0001(kitti_tracking_lidar):
     assert ap["bev", 0.5] > 90.0 and ap["3d", 0.5] > 90.0
     # 3D IoU never exceeds bird-view IoU for boxes of this height; a looser IoU finds more
     assert ap["3d", 0.7] <= ap["bev", 0.7] <= ap["bev", 0.5]
+    # PointRCNN knows front from back: its orientation score stays near its 2D AP
+    assert ap["2d", 0.7] - 5.0 < r.aos("Car", "moderate", 0.7) <= ap["2d", 0.7] + 1e-9
 
 
 # ------------------------------------------------------------------ command line

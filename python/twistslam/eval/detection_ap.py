@@ -75,6 +75,11 @@ class APCurve:
         recall reached at each threshold (``devkit``, 0 past the last).
     thresholds : (K,) score thresholds, decreasing (``K <= 41`` with ``devkit``).
     n_gt : evaluated ground-truth boxes (the recall denominator).
+    aos_r40 : average orientation similarity in percent (the devkit's AOS, on the same
+        recall points): precision with each true positive weighted by
+        ``(1 + cos(alpha_det - alpha_gt)) / 2``, so a box turned around counts 0. At most
+        ``ap_r40``; equal when every matched box faces its label's way. NaN without ground
+        truth or when a matched box has no observation angle (alpha -10).
     """
 
     cls: str
@@ -87,12 +92,14 @@ class APCurve:
     recall: np.ndarray
     thresholds: np.ndarray
     n_gt: int
+    aos_r40: float = float("nan")
 
     def to_dict(self) -> dict:
         return {
             "class": self.cls, "difficulty": self.difficulty, "metric": self.metric,
             "iou": self.min_overlap, "ap_r40": _json_float(self.ap_r40),
-            "ap_r11": _json_float(self.ap_r11), "n_gt": self.n_gt,
+            "ap_r11": _json_float(self.ap_r11), "aos_r40": _json_float(self.aos_r40),
+            "n_gt": self.n_gt,
             "precision": [float(v) for v in self.precision],
             "recall": [float(v) for v in self.recall],
             "thresholds": [float(v) for v in self.thresholds],
@@ -119,22 +126,34 @@ class DetectionAPResult:
         """AP_R40 in percent of one (class, difficulty, metric, IoU)."""
         return self.curve(cls, difficulty, metric, iou).ap_r40
 
+    def aos(self, cls: str, difficulty: str, iou: float) -> float:
+        """AOS_R40 in percent of one (class, difficulty) on the image boxes at ``iou`` (the
+        devkit's orientation score)."""
+        return self.curve(cls, difficulty, "2d", iou).aos_r40
+
     def table(self) -> str:
         """AP_R40 (%) as text: a block per class, a row per difficulty, a column per
-        (metric, IoU), and the number of evaluated ground-truth boxes."""
+        (metric, IoU), ``AOS@iou`` after the image-box columns (the devkit's orientation
+        score), and the number of evaluated ground-truth boxes."""
         lines = [f"AP_R40 (%) over {self.n_frames} frames, KITTI object benchmark rules, "
-                 f"{self.sampling} recall sampling"]
+                 f"{self.sampling} recall sampling; AOS: orientation similarity on the image boxes"]
         for cls in dict.fromkeys(c.cls for c in self.curves):
             mine = [c for c in self.curves if c.cls == cls]
             columns = list(dict.fromkeys((c.metric, c.min_overlap) for c in mine))
+            columns += [("aos", iou) for m, iou in columns if m == "2d"]
             header = [f"{m.upper()}@{iou:g}" for m, iou in columns]
             lines.append(f"{cls:<12}" + "".join(f"{h:>10}" for h in header) + f"{'n_gt':>7}")
             for difficulty in dict.fromkeys(c.difficulty for c in mine):
                 row = [c for c in mine if c.difficulty == difficulty]
-                cells = "".join(f"{_cell(self.curve(cls, difficulty, m, iou).ap_r40):>10}"
+                cells = "".join(f"{_cell(self._value(cls, difficulty, m, iou)):>10}"
                                 for m, iou in columns)
                 lines.append(f"  {difficulty:<10}{cells}{row[0].n_gt:>7}")
         return "\n".join(lines) + "\n"
+
+    def _value(self, cls: str, difficulty: str, column: str, iou: float) -> float:
+        if column == "aos":
+            return self.aos(cls, difficulty, iou)
+        return self.ap(cls, difficulty, column, iou)
 
     def to_dict(self) -> dict:
         """JSON-ready dict (NaN written as ``null``)."""
@@ -213,10 +232,12 @@ def _curve(frames: list[FrameBoxes], cls: str, difficulty: str, metric: str,
         thresholds = score_thresholds(scores, n_gt)[:N_SAMPLE_POINTS]  # a 41-point curve
     else:
         thresholds = np.unique(scores)[::-1]
-    tp, fp, fn = _counts(frames, min_overlap, thresholds)
+    tp, fp, fn, similarity = _counts(frames, min_overlap, thresholds)
     with np.errstate(divide="ignore", invalid="ignore"):
         precision = np.nan_to_num(tp / (tp + fp))
         recall = np.nan_to_num(tp / (tp + fn))
+        # a NaN similarity (an unknown angle) stays NaN: no AOS
+        orientation = np.where(tp + fp > 0, similarity / (tp + fp), 0.0)
     if sampling == "devkit":
         # the k-th threshold stands for recall k / 40; points never reached count 0
         sampled = np.zeros(N_SAMPLE_POINTS)
@@ -224,25 +245,34 @@ def _curve(frames: list[FrameBoxes], cls: str, difficulty: str, metric: str,
         curve_recall = np.zeros(N_SAMPLE_POINTS)
         curve_recall[: len(thresholds)] = recall
         interpolated = np.maximum.accumulate(sampled[::-1])[::-1]
+        sampled_aos = np.zeros(N_SAMPLE_POINTS)
+        sampled_aos[: len(thresholds)] = orientation
+        interpolated_aos = np.maximum.accumulate(sampled_aos[::-1])[::-1]
     else:
         # best precision over the thresholds reaching at least each recall point (0 if none)
         reaches = recall[None, :] >= RECALL_GRID[:, None] - RECALL_ROUND_OFF  # (41, K)
         interpolated = np.where(reaches, precision[None, :], 0.0).max(axis=1, initial=0.0)
+        # the devkit interpolates the orientation score as it does precision
+        interpolated_aos = np.where(reaches, orientation[None, :], 0.0).max(axis=1, initial=0.0)
         curve_recall = RECALL_GRID.copy()
     if n_gt == 0:
-        ap_r40 = ap_r11 = float("nan")
+        ap_r40 = ap_r11 = aos_r40 = float("nan")
     else:
         ap_r40 = float(interpolated[R40_POINTS].mean() * 100.0)
         ap_r11 = float(interpolated[R11_POINTS].mean() * 100.0)
+        known = np.isfinite(similarity).all()
+        aos_r40 = float(interpolated_aos[R40_POINTS].mean() * 100.0) if known else float("nan")
     return APCurve(cls=cls, difficulty=difficulty, metric=metric, min_overlap=float(min_overlap),
                    ap_r40=ap_r40, ap_r11=ap_r11, precision=interpolated, recall=curve_recall,
-                   thresholds=thresholds, n_gt=n_gt)
+                   thresholds=thresholds, n_gt=n_gt, aos_r40=aos_r40)
 
 
 def _counts(frames: list[FrameBoxes], min_overlap: float,
-            thresholds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(K,) TP, FP, FN summed over the frames at each score threshold."""
+            thresholds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(K,) TP, FP, FN and orientation similarity summed over the frames at each score
+    threshold."""
     totals = np.zeros((len(thresholds), 3), dtype=np.int64)
+    similarity = np.zeros(len(thresholds))
     for f in frames:
         # a detection overlapping no ground-truth box never matches: when kept it is simply
         # a false positive (unless ignored or over a DontCare region), counted without
@@ -262,7 +292,8 @@ def _counts(frames: list[FrameBoxes], min_overlap: float,
                 continue
             c = frame_counts(f, min_overlap, score_threshold=thresholds[at][0])
             totals[at] += (c.tp, c.fp, c.fn)
-    return totals[:, 0], totals[:, 1], totals[:, 2]
+            similarity[at] += c.similarity
+    return totals[:, 0], totals[:, 1], totals[:, 2], similarity
 
 
 def _by_frame(tables: Tables, name: str) -> dict[int, ObjectTable]:

@@ -33,6 +33,9 @@ from .difficulty import Difficulty, class_masks
 #: state of a box in the evaluation of one class at one difficulty (the devkit's -1 / 0 / 1)
 EVALUATED, IGNORED = 0, 1
 
+#: the alpha KITTI files write where the observation angle is unknown (DontCare rows)
+UNKNOWN_ALPHA = -10.0
+
 #: score-threshold sample points along recall: 0, 1/40, ..., 1 (the devkit's N_SAMPLE_PTS)
 N_SAMPLE_POINTS = 41
 
@@ -48,6 +51,8 @@ class FrameBoxes:
     det_scores : (D,) float, detector confidences.
     overlaps : (D, G) float, IoU of each detection with each ground-truth box.
     covers_dont_care : (D,) bool, the detection lies over a DontCare region (2D metric only).
+    gt_alpha, det_alpha : (G,) and (D,) float, observation angles (rad; ``UNKNOWN_ALPHA``
+        where the file has none), for the orientation similarity of the matched pairs.
     """
 
     gt_state: np.ndarray
@@ -55,6 +60,15 @@ class FrameBoxes:
     det_scores: np.ndarray
     overlaps: np.ndarray
     covers_dont_care: np.ndarray
+    gt_alpha: np.ndarray | None = None
+    det_alpha: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        # without angles every one is unknown (no orientation similarity)
+        if self.gt_alpha is None:
+            object.__setattr__(self, "gt_alpha", np.full(len(self.gt_state), UNKNOWN_ALPHA))
+        if self.det_alpha is None:
+            object.__setattr__(self, "det_alpha", np.full(len(self.det_state), UNKNOWN_ALPHA))
 
     @property
     def n_evaluated_gt(self) -> int:
@@ -65,7 +79,8 @@ class FrameBoxes:
         """The same frame with only the detections ``keep`` (mask or indices), in order."""
         return FrameBoxes(gt_state=self.gt_state, det_state=self.det_state[keep],
                           det_scores=self.det_scores[keep], overlaps=self.overlaps[keep],
-                          covers_dont_care=self.covers_dont_care[keep])
+                          covers_dont_care=self.covers_dont_care[keep], gt_alpha=self.gt_alpha,
+                          det_alpha=self.det_alpha[keep])
 
 
 @dataclass(frozen=True)
@@ -76,6 +91,9 @@ class FrameCounts:
     fp: int
     fn: int
     tp_scores: np.ndarray  # (tp,) scores of the detections counted as true positives
+    # sum over the true positives of (1 + cos(alpha_det - alpha_gt)) / 2, the devkit's
+    # orientation similarity (NaN when a true positive's angle is unknown)
+    similarity: float = 0.0
 
 
 def ground_truth_states(gt: ObjectTable, cls: str, difficulty: Difficulty) -> np.ndarray:
@@ -127,7 +145,8 @@ def frame_boxes(gt: ObjectTable, det: ObjectTable, gt_state: np.ndarray,
     else:
         covers = np.zeros(int(d.sum()), dtype=bool)
     return FrameBoxes(gt_state=gt_state[g], det_state=det_state[d], det_scores=det.score[d],
-                      overlaps=overlaps[np.ix_(d, g)], covers_dont_care=covers)
+                      overlaps=overlaps[np.ix_(d, g)], covers_dont_care=covers,
+                      gt_alpha=gt.alpha[g], det_alpha=det.alpha[d])
 
 
 def frame_overlaps(gt: ObjectTable, det: ObjectTable, metric: str) -> np.ndarray:
@@ -168,6 +187,7 @@ def frame_counts(frame: FrameBoxes, min_overlap: float,
     kept = free.copy()  # the detections in play at this threshold
     tp = fn = 0
     tp_scores = []
+    similarity = 0.0
     for i, gt_state in enumerate(frame.gt_state):
         candidates = np.flatnonzero(free & (frame.overlaps[:, i] > min_overlap))
         match = -1
@@ -186,11 +206,21 @@ def frame_counts(frame: FrameBoxes, min_overlap: float,
         if gt_state == EVALUATED and frame.det_state[match] == EVALUATED:
             tp += 1
             tp_scores.append(frame.det_scores[match])
+            similarity += orientation_similarity(frame.det_alpha[match], frame.gt_alpha[i])
     fp = 0
     if counting:
         unmatched = free & kept & (frame.det_state == EVALUATED) & ~frame.covers_dont_care
         fp = int(np.count_nonzero(unmatched))
-    return FrameCounts(tp=tp, fp=fp, fn=fn, tp_scores=np.asarray(tp_scores, dtype=np.float64))
+    return FrameCounts(tp=tp, fp=fp, fn=fn, tp_scores=np.asarray(tp_scores, dtype=np.float64),
+                       similarity=similarity)
+
+
+def orientation_similarity(alpha_det: float, alpha_gt: float) -> float:
+    """(1 + cos(alpha_det - alpha_gt)) / 2: 1 for the same heading, 0 for a box turned
+    around (the devkit's AOS term); NaN when either angle is unknown (``UNKNOWN_ALPHA``)."""
+    if alpha_det == UNKNOWN_ALPHA or alpha_gt == UNKNOWN_ALPHA:
+        return float("nan")
+    return 0.5 * (1.0 + float(np.cos(alpha_det - alpha_gt)))
 
 
 def score_thresholds(tp_scores: np.ndarray, n_gt: int,
