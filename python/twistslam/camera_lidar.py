@@ -44,7 +44,9 @@ def estimate_offset(frame: Frame, camera, config: Config,
     """The disparity offset of ``camera`` (its own offset ignored) from one stereo frame and
     its scan ``frame.points_c``; returns on ``config.tracking.dynamic_class_ids`` (per
     ``labels``) are not used. Not ``valid`` without a scan or with fewer than
-    ``config.lidar.offset_min_samples`` keypoints having both depths."""
+    ``config.lidar.offset_min_samples`` keypoints having both depths, nor when the median is
+    within ``config.lidar.offset_min_significance`` standard errors or
+    ``config.lidar.offset_min_abs_px`` of 0 (the calibration is then trusted)."""
     from twistslam import features
     from twistslam._core import lidar as _lidar
 
@@ -75,6 +77,9 @@ def estimate_offset(frame: Frame, camera, config: Config,
         return OffsetEstimate(False, 0.0, mad, n, f"{offset:+.3f} px is within "
                               f"{config.lidar.offset_min_significance:g} standard errors "
                               f"({standard_error:.3f} px) of 0")
+    if abs(offset) < config.lidar.offset_min_abs_px:
+        return OffsetEstimate(False, 0.0, mad, n, f"{offset:+.3f} px is below "
+                              f"{config.lidar.offset_min_abs_px:g} px, the estimator's own bias")
     return OffsetEstimate(True, offset, mad, n)
 
 
