@@ -116,7 +116,12 @@ std::vector<int> ObjectTracker::associate_detections(const Frame& frame,
       // hidden one, whose stereo points straddle both) would move the cluster onto that car
       // and leave its own untracked (crowded seed 4); one on the cluster's own mask is its car
       // even where a far cluster's stereo depth put it beyond the gate
-      if (track.canonical || instances[i] <= 0 || lidar_options_.box_instance_min_returns <= 0 ||
+      // (for a canonical track: a vehicle's only; a person's narrow mask catches the returns
+      // of whatever stands behind it, crowded seed 0: a ghost 2 m off its pedestrian)
+      const bool own_mask_rule = !track.canonical || (lidar_options_.own_mask_boxes_for_canonical &&
+                                                      track.link == geometry::LinkType::kPlanar);
+      if (!own_mask_rule || instances[i] <= 0 ||
+          lidar_options_.box_instance_min_returns <= 0 ||
           !(distance <= lidar_options_.box_instance_max_distance_m))
         continue;
       const int box_instance = instance_of_box(static_cast<int>(d));

@@ -14,6 +14,9 @@ struct ObjectLidarOptions {
   // object masks, the most on the cluster's own (decided from this many returns; 0: off)
   int box_instance_min_returns = 5;
   double box_instance_max_distance_m = 6.0;  // ... up to this far (a box on its instance: its car)
+  // the same for a canonical vehicle track's later boxes (its visual motion may have left its
+  // car's boxes beyond detection_max_distance_m)
+  bool own_mask_boxes_for_canonical = true;
   // a cluster's instance taken by mask overlap alone must lie within this depth ratio of the
   // mask's LiDAR returns (a car passing in front of a far cluster; 0: off), and a new cluster's
   // stereo points as well (wrong matches)
@@ -103,6 +106,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("detection_max_distance_m", o.detection_max_distance_m, 0.0, 1000.0);
   visit("box_instance_min_returns", o.box_instance_min_returns, 0, 1000000);
   visit("box_instance_max_distance_m", o.box_instance_max_distance_m, 0.0, 1000.0);
+  visit("own_mask_boxes_for_canonical", o.own_mask_boxes_for_canonical, 0, 1);
   visit("mask_max_depth_ratio", o.mask_max_depth_ratio, 0.0, 1000.0);  // 0: off, else >= 1
   visit("mask_min_returns", o.mask_min_returns, 1, 1000000);
   visit("detection_min_score", o.detection_min_score, -1e9, 1e9);

@@ -41,6 +41,12 @@ class LidarObjectsConfig:
         "only box the cluster may take (a nearer box whose returns were too few to vote won "
         "over it: oracle urban seed 0, 5/6 -> 6/6 cars). Not tuned: 6 m is 1.5 car lengths "
         "(docs/lidar_objects.md, association)", "m", lo=0.0, hi=1000.0)
+    own_mask_boxes_for_canonical: bool = param(
+        True, "the rule above for a canonical vehicle track's later boxes too (off: only its "
+        "first box; people keep the gate: a person's narrow mask catches the returns of what "
+        "stands behind it, crowded seed 0 got a ghost 2 m off its pedestrian): a far oncoming car's visual motion fell 0.1-0.2 m/frame short, its boxes drifted "
+        "beyond detection_max_distance_m and none came back for 20 frames (urban seed 11, "
+        "400 frames: its heading, set by one box mod pi, stayed 165 deg off)")
     mask_max_depth_ratio: float = param(
         1.3, "a cluster given an instance by mask overlap alone (too few matched points on it) "
         "loses it when its points projected on the mask lie this many times nearer or farther "

@@ -578,6 +578,40 @@ TEST_F(DetectionFusion, ABoxOnTheClustersOwnMaskIsItsCarBeyondTheGate) {
   }
 }
 
+// Urban seed 11 (400 frames): a far oncoming car's visual motion fell short, so its canonical
+// track lagged its boxes by more than the 2 m gate and took none for 20 frames (its heading,
+// set mod pi by its one box, stayed backwards). A later box on the track's own mask is its car
+// beyond the gate too. Here the first box is 2.5 m off along the car: every later box (on the
+// car) lies beyond the gate of the frame it set.
+TEST_F(DetectionFusion, ALaterBoxOnTheTracksOwnMaskIsItsCarBeyondTheGate) {
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.3, 0, 0.1), 0.0);
+  Boxes boxes;
+  boxes.lidar = true;
+  boxes.first_offset = Vec3(2.5, 0, 0);  // along the car's length (its x axis): on its mask still
+  for (const bool for_canonical : {true, false}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.own_mask_boxes_for_canonical = for_canonical;
+    auto tracker = make_tracker({}, lidar);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    run_with_boxes(tracker, car, background, 8, boxes, rng, &reports);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    ASSERT_TRUE(track.canonical);
+    EXPECT_TRUE(track.frames[0].has_detection()) << "the first box, within the gate";
+    int later_boxes = 0;
+    for (const auto& row : track.frames) later_boxes += row.frame > 0 && row.has_detection();
+    const double error_m = (track.last().T_w_o.topRightCorner<3, 1>() -
+                            car.pose(track.last().frame).topRightCorner<3, 1>()).norm();
+    if (for_canonical) {
+      EXPECT_EQ(later_boxes, 7);
+      EXPECT_LT(error_m, 0.5) << "the boxes bring the track onto its car";
+    } else {  // only the first box: the track keeps its frame 2.5 m off the car
+      EXPECT_EQ(later_boxes, 0);
+      EXPECT_GT(error_m, 2.0);
+    }
+  }
+}
+
 // Urban seed 0: a far oncoming car's cluster (stereo depths too far) lay 1.76 m from its own
 // box and 1.70 m from the box of a parked car hidden behind it, whose 9 returns were too few
 // to vote. Its own box, on its own mask, must win over a nearer box that did not vote.
