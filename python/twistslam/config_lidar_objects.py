@@ -44,7 +44,8 @@ class LidarObjectsConfig:
     own_mask_boxes_for_canonical: bool = param(
         True, "the rule above for a canonical vehicle track's later boxes too (off: only its "
         "first box; people keep the gate: a person's narrow mask catches the returns of what "
-        "stands behind it, crowded seed 0 got a ghost 2 m off its pedestrian): a far oncoming car's visual motion fell 0.1-0.2 m/frame short, its boxes drifted "
+        "stands behind it, crowded seed 0 got a ghost 2 m off its pedestrian): a far oncoming "
+        "car's visual motion fell 0.1-0.2 m/frame short, its boxes drifted "
         "beyond detection_max_distance_m and none came back for 20 frames (urban seed 11, "
         "400 frames: its heading, set by one box mod pi, stayed 165 deg off)")
     mask_max_depth_ratio: float = param(
