@@ -240,3 +240,37 @@ def test_asynchronous_ba_gives_the_synchronous_results(sim):
     np.testing.assert_array_equal(ran, np.isfinite(a.timings.stages["local_ba_wait"]))
     keyframes = np.flatnonzero(a.is_keyframe[:-1]) + 1
     assert ran.sum() >= 3 and set(np.flatnonzero(ran)) <= set(keyframes)
+
+
+def test_rows_beside_the_image_are_neither_written_nor_reported(tmp_path):
+    from types import SimpleNamespace
+
+    from PIL import Image
+
+    from twistslam.objects.tracking import in_image
+    from twistslam.objects.visual import visual_objects
+
+    # in_image: finite and with an area once clipped; NaN = behind the camera
+    boxes = np.array([[10, 10, 50, 40], [0, 200, 0, 250], [5, 5, 9, 5], [np.nan] * 4], float)
+    np.testing.assert_array_equal(in_image(boxes), [True, False, False, False])
+
+    # a car 10 m ahead, then 40 m to the left of the optical axis (outside KITTI's ~80 deg
+    # field of view, so its clipped 2D box has no width), then ahead again
+    (tmp_path / "image_02" / "0000").mkdir(parents=True)
+    Image.new("RGB", (1242, 375)).save(tmp_path / "image_02" / "0000" / "000000.png")
+    P2 = np.array([[721.5, 0, 609.6, 44.9], [0, 721.5, 172.9, 0.2], [0, 0, 1, 0.003]])
+    sequence = SimpleNamespace(base=tmp_path, seq="0000", calib=SimpleNamespace(P2=P2))
+    frames = np.arange(4)
+    T_w_o = np.repeat(np.eye(4)[None], 4, 0)
+    T_w_o[:, 2, 3] = 10.0
+    T_w_o[1:3, 0, 3] = -40.0
+    rng = np.random.default_rng(5)
+    cluster = {
+        "id": 3, "class_id": 26, "state": "confirmed", "link": "planar", "hits": 4,
+        "frames": frames, "T_w_o": T_w_o, "points_o": rng.uniform(-1, 1, (40, 3)),
+        "detected": np.ones(4, bool), "reported": np.ones(4, bool),
+    }
+    out = visual_objects([cluster], sequence, {int(f): np.eye(4) for f in frames})
+    np.testing.assert_array_equal(out.objects[0].reported, [True, False, False, True])
+    np.testing.assert_array_equal(out.tracking.frame, [0, 3])
+    assert (out.tracking.box_2d[:, 2] > out.tracking.box_2d[:, 0]).all()

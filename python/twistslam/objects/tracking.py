@@ -104,6 +104,19 @@ def _camera_frame_boxes(T_c_w: np.ndarray, T_w_o: np.ndarray, size: np.ndarray) 
     return np.column_stack([T_c_o[:, :3, 3], np.tile(size, (len(T_c_o), 1)), ry])
 
 
+def in_image(box_2d: np.ndarray) -> np.ndarray:
+    """(N,) bool: rows of projected boxes ``[x1, y1, x2, y2]`` (clipped to the image when its
+    size is known) that are finite and keep an area. NaN: every corner behind the camera; no
+    area: the box lies wholly beside the image. Either way the object is not in the left image,
+    which is all that KITTI labels: such a row is a false positive (or a poor match of a car at
+    the image's edge), and is not written
+    (validation split, detections tracker at track score >= 4: FP 285 -> 273, FN unchanged;
+    docs/objects.md)."""
+    box_2d = np.asarray(box_2d, dtype=np.float64).reshape(-1, 4)
+    return (np.isfinite(box_2d).all(axis=1) & (box_2d[:, 2] > box_2d[:, 0])
+            & (box_2d[:, 3] > box_2d[:, 1]))
+
+
 def _speed_kmh(T_w_o: np.ndarray, period: float) -> np.ndarray:
     if len(T_w_o) < 2:
         return np.zeros(len(T_w_o))
@@ -127,12 +140,12 @@ def _results(tracks: list[dict], names: list[str], T_w_c: np.ndarray, calib, ima
         box_3d = _camera_frame_boxes(T_c_w[frames], t["T_w_o"][rows], t["size"])
         if calib is not None:
             box_2d = geometry.project_boxes(box_3d, calib.P2, *image_size)
-            visible = np.isfinite(box_2d).all(axis=1)  # NaN: every corner behind the camera
+            visible = in_image(box_2d)
         else:  # no calibration: the devkit's "no 2D box" placeholder
             box_2d = np.full((len(rows), 4), -1.0)
             visible = box_3d[:, 2] > 0
-        # A predicted box behind the camera (a wild extrapolation) is no observation: the
-        # output policy drops it rather than write an unreadable line.
+        # A predicted box behind the camera (a wild extrapolation) or beside the image is no
+        # observation: the output policy drops it rather than write an unreadable line.
         reported[rows[~visible]] = False
         rows, frames, box_3d, box_2d = rows[visible], frames[visible], box_3d[visible], box_2d[visible]
         objects.append(TrackedObject(

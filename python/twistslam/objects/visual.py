@@ -21,7 +21,7 @@ import numpy as np
 
 from ..datasets import ObjectTable, write_tracking_results
 from .result import TrackedObject
-from .tracking import _image_size, _speed_kmh
+from .tracking import _image_size, _speed_kmh, in_image
 
 #: Cityscapes class id -> KITTI type written to the tracking results
 KITTI_TYPES = {24: "Pedestrian", 25: "Cyclist", 26: "Car", 27: "Truck", 28: "Misc", 29: "Van",
@@ -155,7 +155,9 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
         ry = np.arctan2(R[:, 0, 2], R[:, 0, 0])
         box_3d = np.column_stack([T_c_box[:, :3, 3], np.tile(size, (len(rows), 1)), ry])
         box_2d = geometry.project_boxes(box_3d, calib.P2, width, height)
-        visible = np.isfinite(box_2d).all(axis=1) & (box_3d[:, 2] > 0)
+        visible = in_image(box_2d) & (box_3d[:, 2] > 0)
+        # a row not written is not reported either (TrackedObject.reported: "written")
+        result.objects[-1].reported[rows[~visible]] = False
         n = int(visible.sum())
         if not n:
             continue
