@@ -62,6 +62,7 @@ py::dict run_detect(const py::handle& points_c, const py::object& options, const
   py::array_t<std::int8_t> open_end(n);
   py::array_t<bool> heading_known(n);
   DoubleArray edge_distance = new_array({n});
+  DoubleArray surface_variation = new_array({n});
   py::list classes;
   for (py::ssize_t i = 0; i < n; ++i) {
     const d::Detection& det = r.detections[static_cast<std::size_t>(i)];
@@ -74,6 +75,7 @@ py::dict run_detect(const py::handle& points_c, const py::object& options, const
     open_end.mutable_data()[i] = static_cast<std::int8_t>(det.open_end);
     heading_known.mutable_data()[i] = det.heading_known;
     edge_distance.mutable_data()[i] = det.edge_distance_m;
+    surface_variation.mutable_data()[i] = det.surface_variation;
     classes.append(d::to_string(det.cls));
   }
   const py::dict timings("select_ms"_a = r.timings.select_ms, "ground_ms"_a = r.timings.ground_ms,
@@ -82,6 +84,7 @@ py::dict run_detect(const py::handle& points_c, const py::object& options, const
                   "num_points"_a = num_points, "length_seen"_a = length_seen,
                   "open_end"_a = open_end, "heading_known"_a = heading_known,
                   "edge_distance_m"_a = edge_distance,
+                  "surface_variation"_a = surface_variation,
                   "num_non_finite"_a = r.num_non_finite,
                   "num_selected"_a = r.num_selected, "num_obstacle"_a = r.num_obstacle,
                   "num_clusters"_a = r.num_clusters, "timings"_a = timings);
@@ -116,7 +119,10 @@ dict
     extended past the seen face, else 0; ``heading_known`` (M,) bool, a car whose front
     was told from the height profile of its returns (``front_from_profile``); ``edge_distance_m`` (M,) float64, the mean distance
     (m) of the box's footprint returns to the nearest edge of their fitted rectangle (a car's
-    faces: a few cm; cars above ``car_max_edge_distance_m`` are not reported); sorted by
+    faces: a few cm; cars above ``car_max_edge_distance_m`` are not reported);
+    ``surface_variation`` (M,) float64, a car's median surface variation (0 for other
+    classes and cars too sparse to judge; cars above ``car_max_surface_variation`` are not
+    reported: foliage); sorted by
     decreasing score. Also ``num_non_finite``, ``num_selected``, ``num_obstacle``,
     ``num_clusters`` and ``timings`` (ms per stage: select, ground, cluster, fit).
 

@@ -36,6 +36,9 @@ struct Detection {
   // m, mean distance of the footprint's returns to the nearest edge of their fitted
   // rectangle: a car's faces give a few cm, volumetric clutter (a bush, a hedge) tenths
   double edge_distance_m = 0;
+  // cars: the median surface variation of the cluster's returns (surface_roughness.hpp; 0
+  // when car_max_surface_variation is off or the cluster too sparse to judge)
+  double surface_variation = 0;
 };
 
 struct ClusterShape {

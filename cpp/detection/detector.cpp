@@ -10,6 +10,7 @@
 #include "detection/ground_removal.hpp"
 #include "detection/occlusion.hpp"
 #include "detection/scene_points.hpp"
+#include "detection/surface_roughness.hpp"
 
 namespace twistslam::detection {
 
@@ -153,6 +154,14 @@ DetectorResult detect(const Eigen::Ref<const Points3>& points_c, const DetectorO
   for (const std::vector<int>& members : clusters) {
     const ClusterShape shape = shape_of(members, scene.points, above, occlusion, options);
     if (std::optional<Detection> d = classify(shape, options)) {
+      if (d->cls == ObjectClass::kCar && options.car_max_surface_variation > 0) {
+        const SurfaceRoughness rough = surface_roughness(
+            members, scene.points, options.surface_voxel_m, options.surface_neighbors);
+        if (rough.num_points >= options.surface_min_points) {
+          if (rough.median_variation > options.car_max_surface_variation) continue;  // foliage
+          d->surface_variation = rough.median_variation;
+        }
+      }
       if (options.front_from_profile && d->cls == ObjectClass::kCar && d->length_seen)
         tell_front(*d, shape, profile_of(*d, shape, members, scene.points), options);
       candidates.push_back(*d);
