@@ -152,3 +152,22 @@ def test_detections3d_table_round_trip():
     assert np.array_equal(back.boxes, dets.boxes) and list(back.classes) == ["Car"]
     with pytest.raises(ValueError, match="finite"):
         Detections3D([[np.nan] * 7], [1.0], ["Car"])
+
+
+def test_a_run_leaves_out_pointrcnn_boxes_below_its_floor_only(kitti_tracking_lidar, tmp_path):
+    from twistslam.datasets import KittiTracking
+    from twistslam.perception.run_stages import POINTRCNN_MIN_SCORE, _file_detections
+
+    seq = KittiTracking(kitti_tracking_lidar, "0001")
+    path = _pointrcnn(kitti_tracking_lidar)
+    every = read_detections(path)
+    low = every.score < POINTRCNN_MIN_SCORE
+    assert low.sum() > 20 and (~low).sum() > 100  # the real file has both
+    used = _file_detections(path, seq)
+    assert len(used) == int((~low).sum()) and (used.score >= POINTRCNN_MIN_SCORE).all()
+    # a table read from that file is still PointRCNN's scale; the same boxes written as KITTI
+    # tracking results (any writer's scale) are all kept
+    assert len(_file_detections(every, seq)) == len(used)
+    results = tmp_path / "0001.txt"
+    write_tracking_results(results, every)
+    assert len(_file_detections(results, seq)) == len(every)

@@ -56,10 +56,16 @@ def read_detections(path: PathLike) -> ObjectTable:
     )
 
 
+def is_pointrcnn_file(path: PathLike) -> bool:
+    """Whether the file's first non-blank line has a comma: the PointRCNN comma format above
+    (an empty file is not)."""
+    with open(path, encoding="utf-8") as f:
+        first = next((line for line in f if line.strip()), "")
+    return "," in first
+
+
 def read_detection_file(path: PathLike) -> ObjectTable:
     """One detection file of a whole sequence: the PointRCNN comma format above when its first
     non-blank line has a comma, else KITTI tracking results (space separated, track ids
     ignored by the callers). An empty file gives an empty table."""
-    with open(path, encoding="utf-8") as f:
-        first = next((line for line in f if line.strip()), "")
-    return read_detections(path) if "," in first else read_labels(path)
+    return read_detections(path) if is_pointrcnn_file(path) else read_labels(path)
