@@ -4,8 +4,9 @@
 // returns) of its returns thinned to one per voxel, so that a neighbourhood spans a physical
 // scale (~0.3 m for 10 neighbours at 0.1 m) whatever the range. A car's panels and glass are
 // smooth there (real KITTI 0001 and object frames: 132 boxes on labelled cars, median 0.023,
-// at most 0.066); foliage scatters its returns in depth (0001's hedge 0.058-0.086, other
-// vegetation up to 0.13; docs/detection.md "Foliage by its roughness").
+// at most 0.066); foliage scatters its returns in depth (0001's kiosk behind a tree and
+// shrubs 0.058-0.086, other vegetation up to 0.13; docs/detection.md "Foliage by its
+// roughness").
 #include <vector>
 
 #include "detection/scene_points.hpp"
