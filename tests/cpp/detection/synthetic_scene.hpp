@@ -74,6 +74,46 @@ inline Points3 cast_scene(const std::vector<SceneBox>& boxes, const SceneRoad& r
   return out;
 }
 
+// A parked car at x = -3 m and a car-sized stand of foliage at foliage_x, both 14 m ahead and
+// along z (yaw pi/2): the scene of the vegetation tests.
+struct CarBesideFoliage {
+  SceneBox car, foliage;
+};
+inline CarBesideFoliage car_beside_foliage(double foliage_x, double length, double width,
+                                           double height) {
+  CarBesideFoliage s;
+  s.car.x = -3.0;
+  s.car.z = 14.0;
+  s.car.yaw = 0.5 * M_PI;
+  s.foliage.x = foliage_x;
+  s.foliage.z = 14.0;
+  s.foliage.length = length;
+  s.foliage.width = width;
+  s.foliage.height = height;
+  s.foliage.yaw = 0.5 * M_PI;
+  return s;
+}
+
+// Whether p lies in the footprint of an upright box along z (yaw pi/2), above the flat road.
+inline bool in_box_along_z(const Vec3& p, const SceneBox& b, const SceneRoad& road = {}) {
+  return std::abs(p.x() - b.x) <= 0.5 * b.width + 1e-6 &&
+         std::abs(p.z() - b.z) <= 0.5 * b.length + 1e-6 && p.y() < road.sensor_height - 1e-6;
+}
+
+// Moves every return of `scan` on the box (along z) further along its ray by step(p) m:
+// foliage lets the beams in, so its returns lie behind its faces. Returns how many moved.
+template <typename Step>
+int push_returns_into(Points3* scan, const SceneBox& box, Step step) {
+  int moved = 0;
+  for (Eigen::Index i = 0; i < scan->rows(); ++i) {
+    const Vec3 p = scan->row(i).transpose();
+    if (!in_box_along_z(p, box)) continue;
+    ++moved;
+    scan->row(i) = (p * (1.0 + step(p) / p.norm())).transpose();
+  }
+  return moved;
+}
+
 // |a - b| modulo pi, in [0, pi/2]: a LiDAR box has no front.
 inline double yaw_error_mod_pi(double a, double b) {
   double e = std::fmod(std::abs(a - b), M_PI);

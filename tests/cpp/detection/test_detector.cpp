@@ -207,33 +207,16 @@ TEST(Detector, CyclistFromTheSideAndATallCarFromBehind) {
 TEST(Detector, BushFilledWithReturnsIsNoCarWhileTheCarBesideItStays) {
   // a car-sized bush beside a parked car: foliage lets the beams in, so its returns lie
   // anywhere along each ray's chord through it, not on its faces
-  SceneBox car, bush;
-  car.x = -3.0;
-  car.z = 14.0;
-  car.yaw = 0.5 * M_PI;
-  bush.x = 6.0;
-  bush.z = 14.0;
-  bush.length = 3.5;
-  bush.width = 2.0;
-  bush.height = 1.8;
-  bush.yaw = 0.5 * M_PI;
+  const auto [car, bush] = car_beside_foliage(6.0, 3.5, 2.0, 1.8);
   Points3 scan = cast_scene({car, bush});
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> depth(0.0, 1.0);
-  const auto inside_bush = [&](const Vec3& p) {  // yaw pi/2: length along z, width along x
-    return std::abs(p.x() - bush.x) <= 0.5 * bush.width + 1e-6 &&
-           std::abs(p.z() - bush.z) <= 0.5 * bush.length + 1e-6 && p.y() < 1.73 - 1e-6;
-  };
-  int foliage = 0;
-  for (Eigen::Index i = 0; i < scan.rows(); ++i) {
-    const Vec3 p = scan.row(i).transpose();
-    if (!inside_bush(p)) continue;
-    ++foliage;
-    // walk in along the ray by a random share of up to 2.5 m, staying inside the bush
+  // walk in along the ray by a random share of up to 2.5 m, staying inside the bush
+  const int foliage = push_returns_into(&scan, bush, [&](const Vec3& p) {
     double step = 2.5 * depth(rng);
-    while (step > 0.01 && !inside_bush(p * (1.0 + step / p.norm()))) step *= 0.5;
-    scan.row(i) = (p * (1.0 + step / p.norm())).transpose();
-  }
+    while (step > 0.01 && !in_box_along_z(p * (1.0 + step / p.norm()), bush)) step *= 0.5;
+    return step;
+  });
   ASSERT_GT(foliage, 300);
 
   const DetectorResult r = detect(scan);

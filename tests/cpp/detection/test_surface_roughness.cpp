@@ -88,29 +88,11 @@ TEST(SurfaceRoughness, TooFewReturnsAndBadArguments) {
 TEST(Detector, HedgeIsNoCarByItsRoughnessWhileTheCarBesideItStays) {
   // a car-sized hedge beside a parked car: its leaves return from a layer up to 0.4 m deep
   // behind its outer faces, shallow enough for the faces' fit (edge distance < 0.25 m)
-  SceneBox car, hedge;
-  car.x = -3.0;
-  car.z = 14.0;
-  car.yaw = 0.5 * M_PI;
-  hedge.x = 5.0;
-  hedge.z = 14.0;
-  hedge.length = 4.0;
-  hedge.width = 1.6;
-  hedge.height = 1.5;
-  hedge.yaw = 0.5 * M_PI;
+  const auto [car, hedge] = car_beside_foliage(5.0, 4.0, 1.6, 1.5);
   Points3 scan = cast_scene({car, hedge});
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> depth(0.0, 0.4);
-  int leaves = 0;
-  for (Eigen::Index i = 0; i < scan.rows(); ++i) {
-    const Vec3 p = scan.row(i).transpose();
-    const bool on_hedge = std::abs(p.x() - hedge.x) <= 0.5 * hedge.width + 1e-6 &&
-                          std::abs(p.z() - hedge.z) <= 0.5 * hedge.length + 1e-6 &&
-                          p.y() < 1.73 - 1e-6;
-    if (!on_hedge) continue;
-    ++leaves;
-    scan.row(i) = (p * (1.0 + depth(rng) / p.norm())).transpose();
-  }
+  const int leaves = push_returns_into(&scan, hedge, [&](const Vec3&) { return depth(rng); });
   ASSERT_GT(leaves, 300);
 
   DetectorOptions off;
