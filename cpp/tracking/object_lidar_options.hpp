@@ -22,6 +22,13 @@ struct ObjectLidarOptions {
   // stereo points as well (wrong matches)
   double mask_max_depth_ratio = 1.3;
   int mask_min_returns = 1;                // fewer LiDAR returns on a mask: no depth test
+  // the LiDAR returns on an instance's own mask (ObjectTracker::instance_returns): a new (or
+  // re-seeded) cluster with too few stereo points places its other keypoints at their depth,
+  bool instance_lidar_depth = true;
+  double instance_lidar_max_depth_m = 30;  // ... for masks whose returns' median is this near
+  // and a stereo point of the instance farther than this fraction from their local depth joins
+  // no cluster (0: off)
+  double instance_lidar_max_depth_error = 0.2;
   double detection_min_score = -1e9;       // detections below this are ignored
   bool canonical_pose = true;              // the first associated box sets the object frame
   double heading_from_motion_m = 1.5;      // travelled this far, a box frame facing backwards turns
@@ -109,6 +116,9 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("own_mask_boxes_for_canonical", o.own_mask_boxes_for_canonical, 0, 1);
   visit("mask_max_depth_ratio", o.mask_max_depth_ratio, 0.0, 1000.0);  // 0: off, else >= 1
   visit("mask_min_returns", o.mask_min_returns, 1, 1000000);
+  visit("instance_lidar_depth", o.instance_lidar_depth, 0, 1);
+  visit("instance_lidar_max_depth_m", o.instance_lidar_max_depth_m, 0.0, 10000.0);
+  visit("instance_lidar_max_depth_error", o.instance_lidar_max_depth_error, 0.0, 10.0);
   visit("detection_min_score", o.detection_min_score, -1e9, 1e9);
   visit("canonical_pose", o.canonical_pose, 0, 1);
   visit("heading_from_motion_m", o.heading_from_motion_m, 0.0, 1e6);

@@ -24,7 +24,7 @@ const std::vector<double>* ObjectTracker::mask_lidar_depths(int instance) const 
       const Vec2 uv = camera_.project(p);
       if (!camera_.in_image(uv)) continue;
       const int id = pixel_value(instances_, uv);
-      if (id > 0) mask_lidar_depths_[id].push_back(p.z());
+      if (id > 0) mask_lidar_depths_[id].push_back(p.z()), mask_lidar_points_[id].push_back(p);
     }
     mask_lidar_depths_ready_ = true;
   }

@@ -309,6 +309,8 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   T_c_w_of_frame_[frame.index] = frame.T_c_w;
   scan_ = scan && scan->rows() > 0 ? scan : nullptr;
   mask_lidar_depths_.clear();
+  mask_lidar_points_.clear();
+  instance_returns_.clear();
   mask_lidar_depths_ready_ = false;
   up_w_ = up_w;
   instances_ = instances;
@@ -400,6 +402,8 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   detections_.clear();
   scan_ = nullptr;
   mask_lidar_depths_.clear();
+  mask_lidar_points_.clear();
+  instance_returns_.clear();
   mask_lidar_depths_ready_ = false;
   drop_stale_scans(frame.index);
   return report;

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "geometry/stereo_camera.hpp"
+#include "lidar/scan_projection.hpp"
 #include "objects/instance_association.hpp"
 #include "objects/object_cluster.hpp"
 #include "objects/object_track.hpp"
@@ -201,9 +202,28 @@ class ObjectTracker : public ObjectBundleTerms {
   // at its ground-contact depth instead (ground_contact.hpp); with fewer than
   // depth_fill_below_points and no contact, at their nearest stereo point's depth.
   // With a LiDAR scan, stereo points more than mask_max_depth_ratio nearer than the median of
-  // the mask's returns are left out (in front of the surface the LiDAR sees: wrong matches).
+  // the mask's returns are left out (in front of the surface the LiDAR sees: wrong matches),
+  // and with too few stereo points the keypoints without depth take the LiDAR depth of their
+  // mask (lidar_depth_points; ObjectLidarOptions::instance_lidar_depth; vehicles) before the
+  // cues above.
+  // *lidar_seeded (when given) tells whether the LiDAR completed the seed.
   bool seed_points(const Frame& frame, int instance, int min_points, bool ground_contact,
-                   std::vector<std::pair<int, Vec3>>* kept, Vec3* centroid) const;
+                   std::vector<std::pair<int, Vec3>>* kept, Vec3* centroid,
+                   bool* lidar_seeded = nullptr) const;
+  // The free keypoints of `instance` without a stereo depth, each at the depth the LiDAR
+  // returns on the instance's own mask give it (a local plane through those near it,
+  // lidar/lidar_depth.hpp; world frame); empty without a scan or when the returns' median
+  // depth is beyond ObjectLidarOptions::instance_lidar_max_depth_m. A car behind a nearer one shows
+  // a sliver whose stereo mostly fails (the right camera sees it hidden differently).
+  std::vector<std::pair<int, Vec3>> lidar_depth_points(const Frame& frame, int instance) const;
+  // The LiDAR returns on `instance`'s own mask within mask_max_depth_ratio of their median
+  // depth, projected into the image (nullptr without a scan or masks), and the depth they give
+  // the pixel uv (NaN where they give none: too few around it, an edge).
+  const lidar::ScanProjection* instance_returns(int instance) const;
+  double instance_lidar_depth(int instance, const Vec2& uv) const;
+  // The median depth of those returns within a few pixels of uv (NaN with too few): where a
+  // local plane needs returns all around, at a mask's edge too (a check, not a measurement).
+  double instance_lidar_depth_near(int instance, const Vec2& uv) const;
   // The free keypoints of `instance` without a stereo depth, at its ground-contact depth
   // (world frame); empty when the mask shows no contact with the road.
   std::vector<std::pair<int, Vec3>> ground_contact_points(const Frame& frame, int instance) const;
@@ -272,6 +292,9 @@ class ObjectTracker : public ObjectBundleTerms {
   const Points3* scan_ = nullptr;               // during track(): the frame's LiDAR scan (c)
   // during track(): mask_lidar_depths' instance -> depths, filled on its first call
   mutable std::map<int, std::vector<double>> mask_lidar_depths_;
+  mutable std::map<int, std::vector<Vec3>> mask_lidar_points_;  // the same returns (camera frame)
+  // during track(): instance_returns' projections, built on first use
+  mutable std::map<int, lidar::ScanProjection> instance_returns_;
   mutable bool mask_lidar_depths_ready_ = false;
   // the boxes no track took, per recent frame (oldest first), for backfill_from_boxes
   struct UnusedBox {

@@ -197,6 +197,38 @@ void expect_motion(const objects::ObjectTrack& track, const Car& car, int first_
   }
 }
 
+constexpr double kLength = 4.0, kWidth = 1.8, kHeight = 1.5;  // the car of make_car
+
+// A LiDAR scan (frame c, camera at the origin) of the car at frame i: points drawn anew each
+// frame on its sides and top (a LiDAR samples other spots every sweep), 1 cm range noise, and
+// road points under and around it.
+Vec3 on_car(const Car& car, int i, const Vec3& X_o) {
+  const Mat4 P = car.pose(i);
+  return P.topLeftCorner<3, 3>() * X_o + P.topRightCorner<3, 1>();
+}
+
+Points3 car_scan(const Car& car, int i, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<Vec3> pts;
+  const Vec3 half(kLength / 2, kHeight / 2, kWidth / 2);
+  for (int k = 0; k < 600; ++k) {
+    Vec3 q(u(rng) * half.x(), u(rng) * half.y(), u(rng) * half.z());
+    const int face = k % 5;  // +-x, +-z, top (-y)
+    if (face == 0) q.x() = half.x();
+    if (face == 1) q.x() = -half.x();
+    if (face == 2) q.z() = half.z();
+    if (face == 3) q.z() = -half.z();
+    if (face == 4) q.y() = -half.y();
+    pts.push_back(on_car(car, i, q) + Vec3(noise(rng), noise(rng), noise(rng)));
+  }
+  for (int k = 0; k < 400; ++k)  // the road: y = the box's bottom
+    pts.push_back(on_car(car, i, Vec3(u(rng) * 4, half.y(), u(rng) * 3)));
+  Points3 out(static_cast<Eigen::Index>(pts.size()), 3);
+  for (size_t k = 0; k < pts.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = pts[k].transpose();
+  return out;
+}
+
 struct TrackerScene : ::testing::Test {
   std::mt19937 rng{1234};
   Background background = make_background(rng);
