@@ -3,7 +3,6 @@
 // seed 1's car 17, 13 m ahead behind car 16, kept 15-25 keypoints on its mask but stereo depths
 // for 0-3 of them (the right camera sees it hidden differently), and those often on the near
 // car's edge, while ~100-400 LiDAR returns fell on its mask.
-#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>

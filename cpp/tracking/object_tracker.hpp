@@ -194,7 +194,9 @@ class ObjectTracker : public ObjectBundleTerms {
   void place_backcast(int c);
   // Step 4: stereo keypoints of `instance` not claimed yet -> points of cluster c.
   void add_points(int c, const Frame& frame, int instance);
-  // Stereo keypoints of `instance` no cluster claimed, in the world frame.
+  // Stereo keypoints of `instance` no cluster claimed, in the world frame, but those farther
+  // than instance_lidar_max_depth_error from the instance's LiDAR depth there
+  // (instance_lidar_depth_near; kept where it gives none).
   std::vector<std::pair<int, Vec3>> free_instance_points(const Frame& frame, int instance) const;
   // The free stereo points of `instance` within max_point_spread_m of their median, and
   // their centroid (world frame); false with fewer than min_points. With ground_contact
