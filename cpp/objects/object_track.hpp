@@ -60,6 +60,10 @@ struct TrackFrame {
   // its sigmas (m/frame at the object's centre, rad/frame in the link's rotation), from
   // GICP's information; zero: e_reg uses the options' fixed sigmas
   Vec2 reg_sigma = Vec2::Zero();
+  // the camera pose T_c_w this row's box and registration were put in w with (the visual
+  // tracker's; identity for the detections tracker): the keyframe BA takes them back into
+  // the camera frame, where they were measured
+  Mat4 T_c_w = Mat4::Identity();
 
   bool has_detection() const { return detection_index >= 0; }
 };

@@ -1,10 +1,12 @@
 // e_dyna and e_link of the local BA (paper eq. 9, ba_terms.hpp): moving objects' keypoints
-// reprojected through their pose at each keyframe, consecutive poses tied by the link.
+// reprojected through their pose at each keyframe, consecutive poses tied by the link; and
+// the LiDAR terms between those poses (e_det / e_reg, the box prior), relative to the cameras.
 #include <stdexcept>
 #include <string>
 
 #include "geometry/se3.hpp"
 #include "optim/ba_terms.hpp"
+#include "optim/camera_object_costs.hpp"
 
 namespace twistslam::optim::detail {
 
@@ -27,6 +29,15 @@ void check_dynamic_indices(const BAProblem& p) {
   for (size_t o = 0; o < p.objects.size(); ++o)
     for (const BAObjectPose& pose : p.objects[o].poses)
       if (pose.keyframe < 0 || pose.keyframe >= K) fail("object", o, "pose keyframe", pose.keyframe, K);
+  for (size_t o = 0; o < p.objects.size(); ++o) {
+    const int P = static_cast<int>(p.objects[o].poses.size());
+    for (const BAObjectMotion& m : p.objects[o].motions) {
+      if (m.pose_a < 0 || m.pose_a >= P) fail("object", o, "motion pose_a", m.pose_a, P);
+      if (m.pose_b < 0 || m.pose_b >= P) fail("object", o, "motion pose_b", m.pose_b, P);
+    }
+    for (const BAObjectBox& box : p.objects[o].boxes)
+      if (box.pose < 0 || box.pose >= P) fail("object", o, "box pose", box.pose, P);
+  }
   for (size_t e = 0; e < p.dynamic_observations.size(); ++e) {
     const BADynamicObservation& d = p.dynamic_observations[e];
     if (d.object < 0 || d.object >= O) fail("dynamic observation", e, "object index", d.object, O);
@@ -91,6 +102,7 @@ void DynamicReprojectionTerms::add_to(ProblemBuilder& b, const std::vector<int>&
       previous = pose_block_[o][k];
     }
   }
+  add_lidar_terms(b);
   for (size_t e = 0; e < E; ++e) {
     const BADynamicObservation& d = p_.dynamic_observations[e];
     if (!ok[e] || seen[d.object][d.point] < 2 || pose_block_[d.object][d.pose] < 0) continue;
@@ -104,6 +116,45 @@ void DynamicReprojectionTerms::add_to(ProblemBuilder& b, const std::vector<int>&
     if (opt_.remove_outliers) b.gate(id, threshold(d));
     used_[e] = 1;
     ++num_used_;
+  }
+}
+
+namespace {
+
+bool usable_sigmas(double sigma_t, double sigma_r) {
+  return std::isfinite(sigma_t) && sigma_t > 0 && std::isfinite(sigma_r) && sigma_r > 0;
+}
+
+}  // namespace
+
+void DynamicReprojectionTerms::add_lidar_terms(ProblemBuilder& b) {
+  for (size_t o = 0; o < p_.objects.size(); ++o) {
+    const BAObject& obj = p_.objects[o];
+    // only between poses e_dyna put in the problem: a pose held by LiDAR terms alone would
+    // bring no camera information, and its keyframe might not be in the problem
+    auto camera_block = [&](int pose) {
+      return pose_block_[o][pose] >= 0 ? keyframe_blocks_[obj.poses[pose].keyframe] : -1;
+    };
+    for (const BAObjectMotion& m : obj.motions) {
+      const int cam_a = camera_block(m.pose_a), cam_b = camera_block(m.pose_b);
+      if (cam_a < 0 || cam_b < 0 || cam_a == cam_b || !m.D.allFinite() ||
+          !geometry::is_rigid_transform(m.D, 1e-3) || !usable_sigmas(m.sigma_translation, m.sigma_rotation))
+        continue;
+      const Vec3 c = obj.poses[m.pose_a].T_w_o.topRightCorner<3, 1>();
+      b.add_residual(make_camera_relative_motion_cost(obj.Pi, m.D, c, m.sigma_translation, m.sigma_rotation),
+                     b.huber(m.huber_delta),
+                     {cam_a, cam_b, pose_block_[o][m.pose_a], pose_block_[o][m.pose_b]});
+      ++num_motions_;
+    }
+    for (const BAObjectBox& box : obj.boxes) {
+      const int cam = camera_block(box.pose);
+      if (cam < 0 || !box.T_c_box.allFinite() || !geometry::is_rigid_transform(box.T_c_box, 1e-3) ||
+          !usable_sigmas(box.sigma_translation, box.sigma_rotation))
+        continue;
+      b.add_residual(make_camera_relative_box_cost(box.T_c_box, box.sigma_translation, box.sigma_rotation),
+                     b.huber(box.huber_delta), {cam, pose_block_[o][box.pose]});
+      ++num_boxes_;
+    }
   }
 }
 

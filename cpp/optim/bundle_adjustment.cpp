@@ -205,6 +205,8 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
   dyna.add_to(builder, stat.keyframe_blocks());
   report.num_residuals = stat.num_used();
   report.num_dynamic_residuals = dyna.num_used();
+  report.num_object_motions = dyna.num_motions();
+  report.num_object_boxes = dyna.num_boxes();
   if (builder.num_residuals() == 0) {
     report.message = "no valid observations";
     report.solve_ms = elapsed_ms();

@@ -44,10 +44,42 @@ struct BAObjectPose {
   bool fixed = false;
 };
 
+// e_det / e_reg of eq. 9 (optional): the object's motion between two of its poses a and b
+// as a LiDAR sensor measured it, relative to the two cameras that saw them:
+//   D = T_cb_o(b) T_ca_o(a)^-1 (camera a's frame to camera b's),
+// from a pair of 3D boxes (eq. 5: D = T_cb_box(b) T_ca_box(a)^-1) or from the GICP
+// registrations of the object scans chained over the frames between a and b (eq. 6-7).
+// Its world motion is T_w_cb D T_ca_w, so the residual
+//   W Pi (log(S T_w_cb D T_ca_w S^-1) - log(S T_w_o(b) T_w_o(a)^-1 S^-1))
+// involves both cameras and both object poses. S moves the world origin to the object's
+// initial position at pose a: a twist's v is the velocity of the point at the origin, and W
+// (diagonal, m and rad over the interval) means what its sigmas say only near the object.
+struct BAObjectMotion {
+  int pose_a = -1, pose_b = -1;  // indices into the object's poses (a before b)
+  Mat4 D = Mat4::Identity();
+  double sigma_translation = 0.1;  // m
+  double sigma_rotation = 0.01;    // rad
+  double huber_delta = 0;          // in sigmas; <= 0: no loss
+};
+
+// The detection pose prior of eq. 9 for an object whose frame is its box frame (canonical):
+// W [t_c_o - t_c_box; log(R_c_box^T R_c_o)] with T_c_o = T_c_w T_w_o, on the camera and the
+// object pose.
+struct BAObjectBox {
+  int pose = -1;  // index into the object's poses
+  Mat4 T_c_box = Mat4::Identity();
+  double sigma_translation = 0.1;  // m
+  double sigma_rotation = 0.01;    // rad
+  double huber_delta = 0;          // in sigmas; <= 0: no loss
+};
+
 struct BAObject {
   std::vector<BAObjectPose> poses;  // in time order (the link ties poses k and k + 1)
   std::vector<Vec3> points_o;       // X_o
   Mat6 Pi = Mat6::Identity();       // the link's projector (geometry/link_projection.hpp)
+  // LiDAR terms: they join only between poses that e_dyna already puts in the problem
+  std::vector<BAObjectMotion> motions;
+  std::vector<BAObjectBox> boxes;
 };
 
 struct BADynamicObservation {
@@ -111,6 +143,8 @@ struct BundleAdjustmentReport {
   // The same per dynamic observation (e_dyna); costs and RMS above are the static term's.
   std::vector<std::uint8_t> dynamic_outlier;
   int num_dynamic_residuals = 0;  // dynamic observations in the first pass
+  int num_object_motions = 0;     // BAObjectMotion terms in the problem (e_det / e_reg)
+  int num_object_boxes = 0;       // BAObjectBox terms in the problem
   int iterations = 0;      // Ceres iterations over both passes
   double solve_ms = 0;     // wall time of the whole call
   bool converged = false;  // a usable solution was computed (false: nothing was changed)

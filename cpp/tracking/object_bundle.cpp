@@ -1,9 +1,11 @@
 // The moving objects in the keyframe BA (paper eq. 9, e_dyna and the link): each live
-// cluster's poses at the window's keyframes, its points seen from two of them, and the
-// refined values taken back. Keyframe observations are kept per point by mark_keyframe.
+// cluster's poses at the window's keyframes, its points seen from two of them, its LiDAR
+// terms between those poses (e_det, e_reg, the box prior), and the refined values taken back. Keyframe observations are kept per point by mark_keyframe.
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
+#include "geometry/se3.hpp"
 #include "tracking/object_tracker.hpp"
 
 namespace twistslam::tracking {
@@ -67,11 +69,53 @@ void ObjectTracker::add_bundle_terms(const std::map<int, int>& slot_of_frame, in
       }
     }
     if (object.points_o.empty()) continue;
+    if (lidar_options_.keyframe_ba_terms) add_bundle_lidar_terms(track, link.rows, &object);
     problem->objects.push_back(std::move(object));
     problem->dynamic_observations.insert(problem->dynamic_observations.end(), observations.begin(),
                                          observations.end());
     bundle_observations_.insert(bundle_observations_.end(), sources.begin(), sources.end());
     bundle_links_.push_back(std::move(link));
+  }
+}
+
+void ObjectTracker::add_bundle_lidar_terms(const objects::ObjectTrack& track,
+                                           const std::vector<int>& rows,
+                                           optim::BAObject* object) const {
+  const ObjectLidarOptions& o = lidar_options_;
+  // a row's box in the camera frame it was measured in
+  auto T_c_box = [&](const objects::TrackFrame& row) { return row.T_c_w * row.T_w_o_detected; };
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const objects::TrackFrame& b = track.frames[rows[k]];
+    // the box prior, where the object frame is the box frame
+    if (o.use_detection_pose && track.canonical && b.has_detection())
+      object->boxes.push_back({static_cast<int>(k), T_c_box(b), o.det_pose_sigma_translation,
+                               o.det_pose_sigma_rotation, o.huber_det});
+    if (k == 0) continue;
+    const objects::TrackFrame& a = track.frames[rows[k - 1]];
+    // e_det (eq. 5) between the boxes of two keyframes: two boxes' noise, whatever the frames
+    // between them
+    if (o.use_detection_twist && a.has_detection() && b.has_detection())
+      object->motions.push_back({static_cast<int>(k) - 1, static_cast<int>(k),
+                                 T_c_box(b) * geometry::se3_inverse(T_c_box(a)),
+                                 o.det_sigma_translation, o.det_sigma_rotation, o.huber_det});
+    // e_reg (eq. 6-7): the registrations of every frame from a to b, chained; each was put in w
+    // with the cameras of its two frames, which cancel along the chain but for the ends'
+    if (!o.use_registration) continue;
+    Mat4 M_w = Mat4::Identity();
+    double var_t = 0, var_r = 0;
+    bool chained = true;
+    for (int r = rows[k - 1] + 1; r <= rows[k] && chained; ++r) {
+      const objects::TrackFrame& row = track.frames[r];
+      chained = row.registered;
+      M_w = row.M_w_registered * M_w;
+      const bool own = row.reg_sigma.minCoeff() > 0;  // from GICP's information
+      var_t += std::pow(own ? row.reg_sigma[0] : o.reg_sigma_translation, 2);
+      var_r += std::pow(own ? row.reg_sigma[1] : o.reg_sigma_rotation, 2);
+    }
+    if (chained)
+      object->motions.push_back({static_cast<int>(k) - 1, static_cast<int>(k),
+                                 b.T_c_w * M_w * geometry::se3_inverse(a.T_c_w), std::sqrt(var_t),
+                                 std::sqrt(var_r), o.huber_reg});
   }
 }
 

@@ -224,6 +224,7 @@ bool ObjectTracker::start_cluster(const Frame& frame, int instance, int class_id
   // a cluster the LiDAR completed is reported once tracked: on real KITTI 0001 such births on
   // masks of false boxes made one-frame tracks (camera alone: 2 false rows where there were 0)
   row.reported = !lidar_seeded;
+  row.T_c_w = frame.T_c_w;
   track.frames.push_back(row);
   track.hits = 1;
   track.confirmed_frame = frame.index;

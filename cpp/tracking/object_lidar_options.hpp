@@ -94,6 +94,9 @@ struct ObjectLidarOptions {
   double reg_min_sigma_translation = 0.01;  // m/frame
   double reg_min_sigma_rotation = 0.001;    // rad/frame
   double huber_reg = 2.0;                  // sigmas
+  // e_det, e_reg and the box prior in the keyframe BA too, relative to its cameras, whenever
+  // local_ba.dynamic_objects puts the objects there (each as its use_* switch above allows)
+  bool keyframe_ba_terms = true;
   // the final smoothing of a track with LiDAR terms (boxes, registered scans): its keypoints'
   // reprojection sigmas times this (ObjectTrackingOptions::final_smoothing)
   double smoothing_keypoint_sigma_scale = 5.0;
@@ -166,6 +169,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("reg_min_sigma_translation", o.reg_min_sigma_translation, 1e-6, 100.0);
   visit("reg_min_sigma_rotation", o.reg_min_sigma_rotation, 1e-6, 10.0);
   visit("huber_reg", o.huber_reg, 0.0, 1000.0);
+  visit("keyframe_ba_terms", o.keyframe_ba_terms, 0, 1);
   visit("smoothing_keypoint_sigma_scale", o.smoothing_keypoint_sigma_scale, 0.01, 1000.0);
 }
 

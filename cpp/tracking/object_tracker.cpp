@@ -249,6 +249,7 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
       reseeded && (!never_tracked || (frame.T_c_w * row.T_w_o)(2, 3) <=
                                          options_.untracked_report_max_depth_m);
   row.reported = valid || reseed_reported || box_kept;
+  row.T_c_w = frame.T_c_w;
   track.frames.push_back(row);
   if (detection >= 0) attach_detection(c, frame, detection);
   if (reseeded) return false;  // fresh points: no statistics, window or new points this frame

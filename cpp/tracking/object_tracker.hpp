@@ -96,6 +96,11 @@ class ObjectTracker : public ObjectBundleTerms {
                         optim::BAProblem* problem) override;
   void take_bundle_result(const optim::BAProblem& problem,
                           const optim::BundleAdjustmentReport& report) override;
+  // The LiDAR terms of one object in the keyframe BA, between its poses (track rows `rows`):
+  // the box prior (canonical tracks), e_det between the boxes of consecutive poses and e_reg
+  // of the registrations chained between them, all in the cameras' frames (BAObjectMotion).
+  void add_bundle_lidar_terms(const objects::ObjectTrack& track, const std::vector<int>& rows,
+                              optim::BAObject* object) const;
 
   // The final smoothing, once the sequence ends (options.final_smoothing; the paper's global
   // BA of the object terms with the cameras fixed): per track, all its rows, every archived

@@ -125,3 +125,34 @@ def test_bad_open_ends_are_refused_at_the_slam_binding():
             system.track(0, 0.0, image, image, None, None, None, None, boxes, np.ones(1),
                          np.array([26]), np.zeros(1, np.int64), np.ones(1, bool),
                          np.array(headings_known))
+
+
+def test_lidar_terms_join_the_keyframe_ba_relative_to_its_cameras(sim):
+    """With local_ba.dynamic_objects the boxes and registrations also enter the keyframe BA
+    (e_det, e_reg, the box prior on camera and object poses): they change the cameras, which
+    stay as accurate, and the car ahead keeps its canonical pose."""
+    from twistslam.datasets import read_poses
+    from twistslam.eval.trajectory import invert
+
+    runs = {}
+    for terms in (True, False):
+        config = {"local_ba": {"dynamic_objects": True},
+                  "lidar_objects": {"keyframe_ba_terms": terms}}
+        runs[terms] = twistslam.run(KittiTracking(sim, "0000"), config, progress=False,
+                                    segmentation="files", flow="files", detector="files")
+    gt_poses = read_poses(sim / "training" / "poses" / "0000.txt")
+
+    def drift(poses):  # camera position error per frame, relative to frame 0
+        est = invert(poses[0])[None] @ poses
+        ref = invert(gt_poses[0])[None] @ gt_poses[: len(poses)]
+        return np.linalg.norm(est[:, :3, 3] - ref[:, :3, 3], axis=1).max()
+
+    on, off = runs[True], runs[False]
+    # one Ceres thread: bit-for-bit runs, so equal cameras would mean no term was added
+    assert not np.array_equal(on.camera_poses, off.camera_poses)
+    # measured: 0.0117 m with the terms, 0.0116 m without over these 15 frames
+    assert drift(on.camera_poses) < 1.3 * drift(off.camera_poses)
+    gt = load_ground_truth(sim, "0000")
+    ev = evaluate_object_tracks(on.objects.reported(), on.camera_poses, gt, min_frames=10)
+    ahead = {row.gt_id: row for row in ev.cars}[AHEAD]
+    assert ahead.coverage >= 0.9 and ahead.ate_canonical < 0.25  # measured 0.028 m
