@@ -290,7 +290,7 @@ class LidarObjectsConfig:
         "objects there. Neutral, measured with it on (urban and crowded seeds 0-2, classical "
         "and oracle boxes): camera RPE 0.00513 / 0.00500 m per frame with / without them "
         "(classical), 0.00500 / 0.00513 (oracle), objects the same to the third digit; on by "
-        "default because it is the paper's BA and costs nothing measurable")
+        "default because eq. 9's BA has them (and it acts only with dynamic_objects)")
     instance_border_px: float = param(
         0.0, "visual_objects.instance_border_px in a frame with 3D boxes: a box places its car, "
         "and a far car's corners along the nearer cars hiding it are what it has left. Six "
