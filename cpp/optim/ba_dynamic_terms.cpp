@@ -1,12 +1,13 @@
 // e_dyna and e_link of the local BA (paper eq. 9, ba_terms.hpp): moving objects' keypoints
 // reprojected through their pose at each keyframe, consecutive poses tied by the link; and
-// the LiDAR terms between those poses (e_det / e_reg, the box prior), relative to the cameras.
+// the terms between those poses: e_const, and the LiDAR terms (e_det / e_reg, the box prior)
+// relative to the cameras.
 #include <stdexcept>
 #include <string>
 
 #include "geometry/se3.hpp"
 #include "optim/ba_terms.hpp"
-#include "optim/camera_object_costs.hpp"
+#include "optim/ba_object_costs.hpp"
 
 namespace twistslam::optim::detail {
 
@@ -102,7 +103,7 @@ void DynamicReprojectionTerms::add_to(ProblemBuilder& b, const std::vector<int>&
       previous = pose_block_[o][k];
     }
   }
-  add_lidar_terms(b);
+  add_object_motion_terms(b);
   for (size_t e = 0; e < E; ++e) {
     const BADynamicObservation& d = p_.dynamic_observations[e];
     if (!ok[e] || seen[d.object][d.point] < 2 || pose_block_[d.object][d.pose] < 0) continue;
@@ -127,9 +128,29 @@ bool usable_sigmas(double sigma_t, double sigma_r) {
 
 }  // namespace
 
-void DynamicReprojectionTerms::add_lidar_terms(ProblemBuilder& b) {
+void DynamicReprojectionTerms::add_object_motion_terms(ProblemBuilder& b) {
   for (size_t o = 0; o < p_.objects.size(); ++o) {
     const BAObject& obj = p_.objects[o];
+    // e_const over the poses in the problem with known, increasing frames
+    if (opt_.object_const && usable_sigmas(obj.const_sigma_translation, obj.const_sigma_rotation)) {
+      std::vector<int> chain;  // pose indices
+      for (size_t k = 0; k < obj.poses.size(); ++k)
+        if (pose_block_[o][k] >= 0 && obj.poses[k].frame >= 0 &&
+            (chain.empty() || obj.poses[k].frame > obj.poses[chain.back()].frame))
+          chain.push_back(static_cast<int>(k));
+      for (size_t j = 2; j < chain.size(); ++j) {
+        const BAObjectPose &a = obj.poses[chain[j - 2]], &m = obj.poses[chain[j - 1]],
+                           &c = obj.poses[chain[j]];
+        const int n_ab = m.frame - a.frame, n_bc = c.frame - m.frame;
+        const double scale = std::sqrt(0.5 * (n_ab + n_bc));
+        b.add_residual(make_keyframe_constant_velocity_cost(
+                           obj.Pi, n_ab, n_bc, m.T_w_o.topRightCorner<3, 1>(),
+                           scale * obj.const_sigma_translation, scale * obj.const_sigma_rotation),
+                       b.huber(obj.const_huber_delta),
+                       {pose_block_[o][chain[j - 2]], pose_block_[o][chain[j - 1]], pose_block_[o][chain[j]]});
+        ++num_const_;
+      }
+    }
     // only between poses e_dyna put in the problem: a pose held by LiDAR terms alone would
     // bring no camera information, and its keyframe might not be in the problem
     auto camera_block = [&](int pose) {

@@ -43,8 +43,8 @@ inline ObservationError observation_error(const geometry::StereoCamera& cam, con
 }
 
 // e_dyna + e_link: the objects of the problem (BAObject), their poses and points as blocks,
-// their keypoints reprojected through the keyframe blocks of e_stat; and the objects' LiDAR
-// terms (BAObjectMotion, BAObjectBox) between those poses and cameras. An object is used when
+// their keypoints reprojected through the keyframe blocks of e_stat; and the objects' e_const
+// and LiDAR terms (BAObjectMotion, BAObjectBox) between those poses (and cameras). An object is used when
 // at least two of its poses are valid and seen; a point when two of its observations are
 // usable (a point seen once is fixed by its own observation and tells the poses nothing).
 class DynamicReprojectionTerms {
@@ -59,6 +59,7 @@ class DynamicReprojectionTerms {
   int num_used() const { return num_used_; }
   int num_motions() const { return num_motions_; }  // BAObjectMotion terms added
   int num_boxes() const { return num_boxes_; }      // BAObjectBox terms added
+  int num_const() const { return num_const_; }      // e_const terms added
   // Outlier flag per dynamic observation at the builder's current state (unused: outlier).
   std::vector<std::uint8_t> outliers(const ProblemBuilder& b) const;
   void write_back(const ProblemBuilder& b, BAProblem& problem) const;
@@ -68,8 +69,8 @@ class DynamicReprojectionTerms {
     return o.u_right >= 0 ? opt_.chi2_stereo : opt_.chi2_mono;
   }
   bool usable(const BADynamicObservation& o) const;
-  // e_det / e_reg / the box prior of each object between its poses in the problem
-  void add_lidar_terms(ProblemBuilder& b);
+  // e_const and e_det / e_reg / the box prior of each object between its poses in the problem
+  void add_object_motion_terms(ProblemBuilder& b);
 
   const BAProblem& p_;
   const geometry::StereoCamera& cam_;
@@ -78,7 +79,7 @@ class DynamicReprojectionTerms {
   std::vector<std::vector<int>> pose_block_, point_block_;  // per object
   std::vector<std::uint8_t> used_;
   int num_used_ = 0;
-  int num_motions_ = 0, num_boxes_ = 0;
+  int num_motions_ = 0, num_boxes_ = 0, num_const_ = 0;
 };
 
 // Throws std::invalid_argument naming the first dynamic observation or object pose whose

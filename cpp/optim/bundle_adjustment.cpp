@@ -207,6 +207,7 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
   report.num_dynamic_residuals = dyna.num_used();
   report.num_object_motions = dyna.num_motions();
   report.num_object_boxes = dyna.num_boxes();
+  report.num_object_const = dyna.num_const();
   if (builder.num_residuals() == 0) {
     report.message = "no valid observations";
     report.solve_ms = elapsed_ms();

@@ -42,6 +42,7 @@ struct BAObjectPose {
   int keyframe = -1;  // index into BAProblem::keyframes: the camera that saw this pose
   Mat4 T_w_o = Mat4::Identity();
   bool fixed = false;
+  int frame = -1;     // its frame index (e_const's frame gaps; -1: unknown, no e_const)
 };
 
 // e_det / e_reg of eq. 9 (optional): the object's motion between two of its poses a and b
@@ -80,6 +81,14 @@ struct BAObject {
   // LiDAR terms: they join only between poses that e_dyna already puts in the problem
   std::vector<BAObjectMotion> motions;
   std::vector<BAObjectBox> boxes;
+  // e_const between three consecutive poses in the problem a, b, c (frames known, increasing):
+  //   W Pi (log(S T_c T_b^-1 S^-1) / n_bc - log(S T_b T_a^-1 S^-1) / n_ab),
+  // n the frame gaps, S the origin at the object's initial position at b; W from these per-frame
+  // sigmas times sqrt((n_ab + n_bc) / 2) (the mean twists of longer intervals differ more).
+  // 0: no e_const.
+  double const_sigma_translation = 0;  // m/frame
+  double const_sigma_rotation = 0;     // rad/frame
+  double const_huber_delta = 0;        // in sigmas; <= 0: no loss
 };
 
 struct BADynamicObservation {
@@ -127,6 +136,8 @@ struct BundleAdjustmentOptions {
   // equations). Ceres' default 1e4 lets the first steps fling weakly constrained points
   // (far, mono) behind the cameras, and each rejected step costs an iteration.
   double initial_trust_region_radius = 10;
+  // e_const between the objects' keyframe poses (BAObject::const_sigma_*); false: left out
+  bool object_const = true;
 };
 
 struct BundleAdjustmentReport {
@@ -145,6 +156,7 @@ struct BundleAdjustmentReport {
   int num_dynamic_residuals = 0;  // dynamic observations in the first pass
   int num_object_motions = 0;     // BAObjectMotion terms in the problem (e_det / e_reg)
   int num_object_boxes = 0;       // BAObjectBox terms in the problem
+  int num_object_const = 0;       // e_const terms in the problem
   int iterations = 0;      // Ceres iterations over both passes
   double solve_ms = 0;     // wall time of the whole call
   bool converged = false;  // a usable solution was computed (false: nothing was changed)

@@ -98,6 +98,7 @@ void solve_local_ba(const geometry::StereoCamera& camera, const LocalBAOptions& 
   ba.num_threads = options.num_threads;
   ba.link_sigma_translation = options.dynamic_link_sigma_translation;
   ba.link_sigma_rotation = options.dynamic_link_sigma_rotation;
+  ba.object_const = options.dynamic_const;
   job->report = optim::bundle_adjust(job->problem, camera, ba);
   job->solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }

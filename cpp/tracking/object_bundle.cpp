@@ -1,6 +1,7 @@
 // The moving objects in the keyframe BA (paper eq. 9, e_dyna and the link): each live
-// cluster's poses at the window's keyframes, its points seen from two of them, its LiDAR
-// terms between those poses (e_det, e_reg, the box prior), and the refined values taken back. Keyframe observations are kept per point by mark_keyframe.
+// cluster's poses at the window's keyframes, its points seen from two of them, e_const and its
+// LiDAR terms between those poses (e_det, e_reg, the box prior), and the refined values taken
+// back. Keyframe observations are kept per point by mark_keyframe.
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -40,7 +41,7 @@ void ObjectTracker::add_bundle_terms(const std::map<int, int>& slot_of_frame, in
       const auto slot = slot_of_frame.find(row.frame);
       if (slot == slot_of_frame.end() || !row.reported) continue;
       pose_of_frame[row.frame] = static_cast<int>(object.poses.size());
-      object.poses.push_back({slot->second, row.T_w_o, false});
+      object.poses.push_back({slot->second, row.T_w_o, false, row.frame});
       link.rows.push_back(r);
     }
     if (object.poses.size() < 2) continue;  // one pose absorbs its observations: no information
@@ -69,6 +70,10 @@ void ObjectTracker::add_bundle_terms(const std::map<int, int>& slot_of_frame, in
       }
     }
     if (object.points_o.empty()) continue;
+    if (options_.use_const) {  // e_const between the keyframe poses, as in the windows
+      object.const_sigma_translation = options_.const_sigma_translation;
+      object.const_sigma_rotation = options_.const_sigma_rotation;
+    }
     if (lidar_options_.keyframe_ba_terms) add_bundle_lidar_terms(track, link.rows, &object);
     problem->objects.push_back(std::move(object));
     problem->dynamic_observations.insert(problem->dynamic_observations.end(), observations.begin(),

@@ -57,6 +57,8 @@ struct LocalBAOptions {
   int dynamic_points_per_object = 20;         // the most often found points of each object
   double dynamic_link_sigma_translation = 0.1; // m, out-of-link motion between keyframes
   double dynamic_link_sigma_rotation = 0.02;   // rad
+  // e_const between the objects' keyframe poses (visual_objects' sigmas and use_const)
+  bool dynamic_const = true;
 };
 
 struct MapOptions {
@@ -142,6 +144,7 @@ void for_each_option(LocalBAOptions& o, Visit&& visit) {
   visit("dynamic_points_per_object", o.dynamic_points_per_object, 0, 100000);  // a cluster's max_points bound
   visit("dynamic_link_sigma_translation", o.dynamic_link_sigma_translation, 1e-6, 100.0);  // m
   visit("dynamic_link_sigma_rotation", o.dynamic_link_sigma_rotation, 1e-6, 10.0);  // rad
+  visit("dynamic_const", o.dynamic_const, 0, 1);
 }
 
 template <typename Visit>

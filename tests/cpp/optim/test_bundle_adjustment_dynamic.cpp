@@ -10,7 +10,7 @@
 
 #include "geometry/link_projection.hpp"
 #include "geometry/se3.hpp"
-#include "optim/camera_object_costs.hpp"
+#include "optim/ba_object_costs.hpp"
 #include "synthetic_scene.hpp"
 
 using namespace twistslam;
@@ -43,7 +43,7 @@ struct Scene {
 
 // Few far static points (mono, 30-60 m) and the car's 40 stereo points; the free keyframes
 // start 0.3 m too high, the car's poses 0.1 m too high and 0.2 m off in the road plane.
-Scene make_scene(unsigned seed) {
+Scene make_scene(unsigned seed, Mat4 (*pose_of)(int) = car_pose, const int* frames = nullptr) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);
   const auto cam = kitti_camera();
@@ -64,7 +64,7 @@ Scene make_scene(unsigned seed) {
   }
   BAObject car;
   car.Pi = geometry::projector_planar(Vec3(0, -1, 0));
-  for (int k = 0; k < kKeyframes; ++k) car.poses.push_back({k, car_pose(k), false});
+  for (int k = 0; k < kKeyframes; ++k) car.poses.push_back({k, pose_of(k), false, frames ? frames[k] : -1});
   while (car.points_o.size() < 40) {  // on the car's back and side: a 4 x 1.5 x 1.8 m box
     const Vec3 X_o(-2 + 4 * u(rng), -0.75 + 1.5 * u(rng), u(rng) < 0.5 ? -0.9 : -2 + 4 * u(rng));
     const int j = static_cast<int>(car.points_o.size());
@@ -320,4 +320,67 @@ TEST(BundleAdjustmentDynamic, LidarTermIndicesOutOfRangeThrow) {
   const auto r = bundle_adjust(p, cam);
   EXPECT_TRUE(r.converged);
   EXPECT_EQ(r.num_object_motions, 0);
+}
+
+namespace {
+
+// Keyframes some frames apart, and a car at a constant world twist per frame (a gentle left
+// curve at 0.6 m per frame): T(f) = exp(f xi) T(0), so e_const's per-frame twists agree.
+constexpr int kFrames[kKeyframes] = {0, 3, 5, 9, 12, 14};
+
+Mat4 constant_twist_car(int k) {
+  Vec6 xi;
+  xi << 0.01, 0, 0.6, 0, 0.006, 0;
+  return geometry::se3_exp(kFrames[k] * xi) * car_pose(0);
+}
+
+}  // namespace
+
+TEST(BundleAdjustmentDynamic, KeyframeConstVelocityVanishesAtAConstantTwistOnly) {
+  const Mat6 Pi = geometry::projector_planar(Vec3(0, -1, 0));
+  std::unique_ptr<ceres::CostFunction> f(detail::make_keyframe_constant_velocity_cost(
+      Pi, kFrames[2] - kFrames[1], kFrames[3] - kFrames[2],
+      constant_twist_car(2).topRightCorner<3, 1>(), 0.01, 0.001));
+  auto a = block(constant_twist_car(1)), b = block(constant_twist_car(2)), c = block(constant_twist_car(3));
+  Vec6 r;
+  std::vector<const double*> blocks{a.data(), b.data(), c.data()};
+  ASSERT_TRUE(f->Evaluate(blocks.data(), r.data(), nullptr));
+  EXPECT_LT(r.norm(), 1e-6);
+  b[2] += 0.05;  // the middle pose 5 cm further along: the two mean twists disagree
+  ASSERT_TRUE(f->Evaluate(blocks.data(), r.data(), nullptr));
+  // 0.05 / 2 frames faster, then 0.05 / 4 frames slower: 3.75 cm/frame, 3.75 sigmas
+  EXPECT_NEAR(r.head<3>().norm(), 3.75, 0.05);
+  EXPECT_THROW(detail::make_keyframe_constant_velocity_cost(Pi, 0, 2, Vec3::Zero(), 0.01, 0.001),
+               std::invalid_argument);
+}
+
+TEST(BundleAdjustmentDynamic, KeyframeConstVelocitySteadiesAnObjectWithFewPoints) {
+  const auto cam = kitti_camera();
+  double e_with = 0, e_without = 0;
+  int terms = 0;
+  for (unsigned seed = 30; seed < 36; ++seed) {
+    Scene with = make_scene(seed, constant_twist_car, kFrames);
+    BAObject& car = with.problem.objects[0];
+    car.points_o.resize(8);
+    auto& obs = with.problem.dynamic_observations;
+    obs.erase(std::remove_if(obs.begin(), obs.end(), [](const auto& o) { return o.point >= 8; }),
+              obs.end());
+    Scene without = with;
+    car.const_sigma_translation = 0.01;
+    car.const_sigma_rotation = 0.001;
+    const auto r_with = bundle_adjust(with.problem, cam);
+    const auto r_without = bundle_adjust(without.problem, cam);
+    ASSERT_TRUE(r_with.converged && r_without.converged);
+    terms += r_with.num_object_const;
+    EXPECT_EQ(r_without.num_object_const, 0);
+    for (int k = 0; k + 1 < kKeyframes; ++k) {
+      const Mat4 truth = camera_relative_motion(with.truth, k, k + 1);
+      e_with += translation_error(camera_relative_motion(with.problem, k, k + 1), truth);
+      e_without += translation_error(camera_relative_motion(without.problem, k, k + 1), truth);
+    }
+  }
+  std::printf("[ info ] keyframe-to-keyframe object motion error: %.4f m with e_const, %.4f m "
+              "without\n", e_with / (6 * (kKeyframes - 1)), e_without / (6 * (kKeyframes - 1)));
+  EXPECT_EQ(terms, 6 * (kKeyframes - 2));
+  EXPECT_LT(e_with, 0.7 * e_without);
 }

@@ -1,13 +1,19 @@
 #pragma once
-// Private (Ceres): the LiDAR terms of the keyframe BA (paper eq. 9, e_det and e_reg, and the
-// detection pose prior), measured relative to the cameras, so that they act on camera pose
-// blocks T_c_w and object pose blocks T_w_o together (bundle_adjustment.hpp:
-// BAObjectMotion, BAObjectBox). Both are 7-vectors [t, q] (pose_parameterization.hpp).
+// Private (Ceres): the object terms of the keyframe BA beyond e_dyna and the link (paper
+// eq. 9): the LiDAR terms (e_det, e_reg, the detection pose prior), measured relative to the
+// cameras, so that they act on camera pose blocks T_c_w and object pose blocks T_w_o together
+// (bundle_adjustment.hpp: BAObjectMotion, BAObjectBox), and e_const between keyframe poses
+// some frames apart. Blocks are 7-vectors [t, q] (pose_parameterization.hpp).
 //
 //   CameraRelativeMotionCost  W Pi (log(S T_w_cb D T_ca_w S^-1) - log(S T_ob T_oa^-1 S^-1))
 //                             blocks (T_ca_w, T_cb_w, T_w_oa, T_w_ob)
 //   CameraRelativeBoxCost     W [t_c_o - t_c_box; log(R_c_box^T R_c_o)], T_c_o = T_c_w T_w_o
 //                             blocks (T_c_w, T_w_o)
+//   KeyframeConstantVelocityCost
+//                             W Pi (log(S T_oc T_ob^-1 S^-1) / n_bc - log(S T_ob T_oa^-1 S^-1) / n_ab)
+//                             blocks (T_w_oa, T_w_ob, T_w_oc): the mean per-frame twists of
+//                             two consecutive keyframe intervals of n_ab and n_bc frames
+//                             (at constant velocity log(T_b T_a^-1) = n_ab xi)
 //
 // S = [I, -c] moves the origin to the object (c: its initial position at pose a). Autodiff:
 // a few such terms per object and keyframe window, against hundreds of reprojections, so the
@@ -84,6 +90,27 @@ struct CameraRelativeBoxCost {
   }
 };
 
+struct KeyframeConstantVelocityCost {
+  Mat6 M;  // W Pi
+  double inv_n_ab, inv_n_bc;
+  Vec3 c;
+
+  template <typename T>
+  Eigen::Matrix<T, 6, 1> twist(const T* a, const T* b) const {
+    using Vec3T = Eigen::Matrix<T, 3, 1>;
+    const Eigen::Quaternion<T> q = pose_quaternion(b) * pose_quaternion(a).conjugate();
+    const Vec3T t = Eigen::Map<const Vec3T>(b) - q * Eigen::Map<const Vec3T>(a);
+    return twist_about(q, t, c);
+  }
+
+  template <typename T>
+  bool operator()(const T* a, const T* b, const T* pc, T* r) const {
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> residual(r);
+    residual = M.cast<T>() * (T(inv_n_bc) * twist(b, pc) - T(inv_n_ab) * twist(a, b));
+    return true;
+  }
+};
+
 // Throw std::invalid_argument for a sigma that is not finite and > 0 (twist_weights).
 inline ceres::CostFunction* make_camera_relative_motion_cost(const Mat6& Pi, const Mat4& D,
                                                              const Vec3& c, double sigma_t,
@@ -104,6 +131,21 @@ inline ceres::CostFunction* make_camera_relative_box_cost(const Mat4& T_c_box, d
   f->q_box = Eigen::Quaterniond(Mat3(T_c_box.topLeftCorner<3, 3>())).normalized();
   f->t_box = T_c_box.topRightCorner<3, 1>();
   return new ceres::AutoDiffCostFunction<CameraRelativeBoxCost, 6, kPoseSize, kPoseSize>(f);
+}
+
+// n_ab, n_bc >= 1 frames; sigmas per frame (twist change), W from them.
+inline ceres::CostFunction* make_keyframe_constant_velocity_cost(const Mat6& Pi, int n_ab, int n_bc,
+                                                                 const Vec3& c, double sigma_t,
+                                                                 double sigma_r) {
+  if (n_ab < 1 || n_bc < 1)
+    throw std::invalid_argument("keyframe e_const: frame gaps must be >= 1");
+  KeyframeConstantVelocityCost* f = new KeyframeConstantVelocityCost;
+  f->M = twist_weights(sigma_t, sigma_r).asDiagonal() * Pi;
+  f->inv_n_ab = 1.0 / n_ab;
+  f->inv_n_bc = 1.0 / n_bc;
+  f->c = c;
+  return new ceres::AutoDiffCostFunction<KeyframeConstantVelocityCost, 6, kPoseSize, kPoseSize,
+                                         kPoseSize>(f);
 }
 
 }  // namespace twistslam::optim::detail
