@@ -201,6 +201,14 @@ Mat4 camera_relative_motion(const BAProblem& truth, int a, int b) {
   return T_cb_o * geometry::se3_inverse(T_ca_o);
 }
 
+// The car of the problem keeps its first n points and their observations only.
+void keep_car_points(Scene* s, int n) {
+  s->problem.objects[0].points_o.resize(n);
+  auto& obs = s->problem.dynamic_observations;
+  obs.erase(std::remove_if(obs.begin(), obs.end(), [n](const auto& o) { return o.point >= n; }),
+            obs.end());
+}
+
 // The pose blocks [t, q] of T.
 std::array<double, 7> block(const Mat4& T) {
   const Eigen::Quaterniond q(Mat3(T.topLeftCorner<3, 3>()));
@@ -278,11 +286,8 @@ TEST(BundleAdjustmentDynamic, RegisteredMotionsSteadyAnObjectWithFewPoints) {
   int motions = 0;
   for (unsigned seed = 20; seed < 26; ++seed) {
     Scene with = make_scene(seed);
+    keep_car_points(&with, 8);
     BAObject& car = with.problem.objects[0];
-    car.points_o.resize(8);
-    auto& obs = with.problem.dynamic_observations;
-    obs.erase(std::remove_if(obs.begin(), obs.end(), [](const auto& o) { return o.point >= 8; }),
-              obs.end());
     Scene without = with;
     for (int k = 0; k + 1 < kKeyframes; ++k)
       car.motions.push_back({k, k + 1, camera_relative_motion(with.truth, k, k + 1), 0.01, 0.001, 0});
@@ -360,11 +365,8 @@ TEST(BundleAdjustmentDynamic, KeyframeConstVelocitySteadiesAnObjectWithFewPoints
   int terms = 0;
   for (unsigned seed = 30; seed < 36; ++seed) {
     Scene with = make_scene(seed, constant_twist_car, kFrames);
+    keep_car_points(&with, 8);
     BAObject& car = with.problem.objects[0];
-    car.points_o.resize(8);
-    auto& obs = with.problem.dynamic_observations;
-    obs.erase(std::remove_if(obs.begin(), obs.end(), [](const auto& o) { return o.point >= 8; }),
-              obs.end());
     Scene without = with;
     car.const_sigma_translation = 0.01;
     car.const_sigma_rotation = 0.001;
