@@ -11,10 +11,12 @@ void TravelDirection::add_step(const Vec3& d_o, const Vec3& up_o) {
   const Vec3 d = d_o - n * n.dot(d_o);  // in the road plane
   moments += d * d.transpose();
   path_m += d.norm();
+  net_o += d;
 }
 
-Vec3 TravelDirection::axis(double min_path_m, double min_anisotropy) const {
+Vec3 TravelDirection::axis(double min_path_m, double min_anisotropy, double min_straightness) const {
   if (!(path_m >= min_path_m) || !moments.allFinite()) return Vec3::Zero();
+  if (net_o.norm() < min_straightness * path_m) return Vec3::Zero();
   const Eigen::SelfAdjointEigenSolver<Mat3> eig(moments);  // ascending eigenvalues
   const Vec3 lambda = eig.eigenvalues();
   if (!(lambda(2) > 0) || lambda(2) < min_anisotropy * std::max(lambda(1), 0.0))

@@ -84,6 +84,7 @@ struct ObjectTrackingOptions {
   double lateral_sigma_m = 0.02;     // m/frame across the travel axis
   double travel_min_path_m = 3.0;    // m travelled before the travel axis is trusted
   double travel_min_anisotropy = 10; // largest / second eigenvalue of the step moments
+  double travel_min_straightness = 0.5;  // net displacement / path before the axis is trusted
   // extra keypoints inside object masks (tracking/object_keypoints.hpp)
   bool extra_keypoints = true;
   int extra_keypoints_max = 1000;     // per frame, over all object masks
@@ -165,6 +166,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("lateral_sigma_m", o.lateral_sigma_m, 1e-4, 100.0);
   visit("travel_min_path_m", o.travel_min_path_m, 0.0, 10000.0);
   visit("travel_min_anisotropy", o.travel_min_anisotropy, 1.0, 1e6);
+  visit("travel_min_straightness", o.travel_min_straightness, 0.0, 1.0);
   visit("extra_keypoints", o.extra_keypoints, 0, 1);
   visit("extra_keypoints_max", o.extra_keypoints_max, 0, 100000);
   visit("extra_min_instance_keypoints", o.extra_min_instance_keypoints, 0, 100000);

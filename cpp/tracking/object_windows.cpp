@@ -155,7 +155,8 @@ bool ObjectTracker::build_window(int c, int first, int rows, const std::map<int,
     }
   }
   if (options_.nonholonomic && track.link == geometry::LinkType::kPlanar) {
-    w->travel_axis_o = track.travel.axis(options_.travel_min_path_m, options_.travel_min_anisotropy);
+    w->travel_axis_o = track.travel.axis(options_.travel_min_path_m, options_.travel_min_anisotropy,
+                                         options_.travel_min_straightness);
     w->up_w = up_w_;
   }
   // LiDAR terms: the boxes of the window's frames (e_det; the pose prior only where the

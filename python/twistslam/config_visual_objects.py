@@ -252,6 +252,12 @@ class VisualObjectsConfig:
     travel_min_anisotropy: float = param(
         10.0, "the travel axis is used once the largest eigenvalue of the step moments is "
         "this many times the second (steps within ~18 deg of one axis)", "ratio", lo=1.0)
+    travel_min_straightness: float = param(
+        0.5, "the travel axis is used once the net displacement is this fraction of the path: "
+        "a crawling far car's steps are stereo depth jitter along the line of sight, as "
+        "anisotropic as a drive, and cancel out. Urban s0 / s8 and crowded s1: tracks that "
+        "drive 0.71-1.00, jittering ones 0.13-0.23 (urban s8's 2.3 km/h car, 47 m away, "
+        "was smoothed 4 m deep along its jitter's axis)", "ratio", lo=0.0, hi=1.0)
     extra_keypoints: bool = param(
         True, "a second, denser ORB pass inside the object masks, and a SAD scan along the "
         "row for every object keypoint without stereo depth (paper: small and far objects "
