@@ -269,7 +269,9 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         map_points=slam.map_points(),
         config=config,
         seq=name,
-        objects=(visual_objects(slam.objects(), sequence, camera_poses, period=_period(sequence))
+        objects=(visual_objects(slam.objects(), sequence, camera_poses, period=_period(sequence),
+                                min_travel_m=config.visual_objects.travel_min_path_m,
+                                min_straightness=config.visual_objects.travel_min_straightness)
                  if perception.segmentation is not None else None),
         segmentation=perception.segmentation_name,
         flow=perception.flow_name,

@@ -5,10 +5,12 @@ A cluster's object frame is the one the core gave it at birth: world axes (ident
 at the centroid of its first points, so ``T_w_o`` is not a canonical box pose, until a 3D
 detection is associated with it (LiDAR fusion, ``config.lidar_objects``): then the frame is
 that box's (canonical pose) and its size the boxes' median. Without one, its box is fitted to
-its points in that frame: yaw about
-the frame's y axis (the first camera's "down") from the principal axis of the points' x-z
-coordinates, extents between the 5th and 95th percentile along each box axis (robust to the
-few background points a mask lets in). Reported frames are those with a valid twist (eq. 4).
+its points in that frame: yaw about the frame's y axis (the first camera's "down") from the
+direction the track drove in (:func:`travel_heading`: its front is where it went), or, for a
+track that did not drive, from the principal axis of the points' x-z coordinates (modulo pi;
+a rear face seen alone gives its width's axis), extents between the 5th and 95th percentile
+along each box axis (robust to the few background points a mask lets in). Reported frames are
+those with a valid twist (eq. 4).
 """
 
 from __future__ import annotations
@@ -31,16 +33,52 @@ KITTI_TYPES = {24: "Pedestrian", 25: "Cyclist", 26: "Car", 27: "Truck", 28: "Mis
 EXTENT_PERCENTILES = (5.0, 95.0)
 
 
-def box_from_points(points_o: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def travel_heading(T_w_o: np.ndarray, frames: np.ndarray, min_travel_m: float = 3.0,
+                   min_straightness: float = 0.5) -> np.ndarray | None:
+    """The unit direction (object frame, its x-z plane) a track drove in, or None.
+
+    Parameters
+    ----------
+    T_w_o : (N, 4, 4) poses of the track's rows; frames : (N,) their frame indices (steps are
+        taken between consecutive frames only).
+    min_travel_m : the net displacement (m) the track must have made.
+    min_straightness : ... as a fraction of its path: steps that cancel out are a parked or
+        crawling car's stereo jitter, along the line of sight (as ``visual_objects.
+        travel_min_straightness`` gates the core's travel axis).
+
+    Each step is taken in the object frame of its later row, ``R_w_o^T (t_i - t_{i-1})``, so a
+    car that turns keeps adding along its own heading.
+    """
+    T_w_o = np.asarray(T_w_o, dtype=np.float64).reshape(-1, 4, 4)
+    frames = np.asarray(frames)
+    if len(T_w_o) < 2:
+        return None
+    steps = np.einsum("nji,nj->ni", T_w_o[1:, :3, :3], T_w_o[1:, :3, 3] - T_w_o[:-1, :3, 3])
+    steps = steps[(np.diff(frames) == 1) & np.isfinite(steps).all(axis=1)][:, [0, 2]]
+    net = steps.sum(axis=0)
+    path = np.linalg.norm(steps, axis=1).sum()
+    distance = np.linalg.norm(net)
+    if not (distance >= min_travel_m and distance >= min_straightness * path):
+        return None
+    return np.array([net[0], 0.0, net[1]]) / distance
+
+
+def box_from_points(points_o: np.ndarray,
+                    heading_o: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(T_o_box, size)`` of a cluster's points (M, 3) in its object frame: the box frame is
     KITTI's (x = length, y = down, z = width), rotated about y; size = (l, w, h) in metres.
+    The box's x axis is ``heading_o`` (a direction in the x-z plane, e.g. from
+    :func:`travel_heading`) when given, else the points' principal horizontal axis.
     Fewer than 3 points give an identity pose and a zero size."""
     T = np.eye(4)
     if len(points_o) < 3:
         return T, np.zeros(3)
-    xz = points_o[:, [0, 2]] - np.median(points_o[:, [0, 2]], axis=0)
-    _, vectors = np.linalg.eigh(xz.T @ xz)
-    dx, dz = vectors[:, -1]  # principal horizontal axis: the car's length
+    if heading_o is not None:
+        dx, dz = heading_o[0], heading_o[2]
+    else:
+        xz = points_o[:, [0, 2]] - np.median(points_o[:, [0, 2]], axis=0)
+        _, vectors = np.linalg.eigh(xz.T @ xz)
+        dx, dz = vectors[:, -1]  # principal horizontal axis: the car's length
     yaw = np.arctan2(-dz, dx)
     c, s = np.cos(yaw), np.sin(yaw)
     R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])  # R_y(yaw), as a KITTI box
@@ -111,9 +149,11 @@ def _rows(obj: TrackedObject, keep: np.ndarray) -> TrackedObject:
 
 
 def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.ndarray],
-                   period: float = 0.1) -> VisualObjects:
+                   period: float = 0.1, min_travel_m: float = 3.0,
+                   min_straightness: float = 0.5) -> VisualObjects:
     """Convert the core's clusters (``Slam.objects()``) with the run's camera poses
-    (frame -> T_w_c) into :class:`VisualObjects`."""
+    (frame -> T_w_c) into :class:`VisualObjects`. ``min_travel_m`` and ``min_straightness``:
+    when a track without a canonical frame counts as driving (:func:`travel_heading`)."""
     from .. import geometry
 
     calib = getattr(sequence, "calib", None)
@@ -129,7 +169,8 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
             # the object frame is its first detection's box frame; size: the boxes' median
             T_o_box, size = np.eye(4), np.asarray(c["size"], dtype=np.float64)
         else:
-            T_o_box, size = box_from_points(points)
+            heading = travel_heading(T_w_o, frames, min_travel_m, min_straightness)
+            T_o_box, size = box_from_points(points, heading)
         cls = KITTI_TYPES.get(int(c["class_id"]), "Misc")
         T_w_box = T_w_o @ T_o_box
         # the core's flag: a valid twist or a re-seed from the instance seen this frame
