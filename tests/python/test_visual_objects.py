@@ -12,7 +12,7 @@ import pytest
 import twistslam
 from twistslam.datasets import KittiTracking, read_tracking_results
 from twistslam.eval.object_tracks import evaluate_object_tracks, load_ground_truth
-from twistslam.objects.visual import box_from_points, travel_heading
+from twistslam.objects.visual import box_from_points
 from twistslam.perception.run_stages import perception_stages
 from twistslam.sim import generate
 
@@ -86,63 +86,6 @@ def test_box_from_points_recovers_a_turned_box():
     angle = np.arctan2(T[0, 2], T[0, 0])
     assert abs(np.sin(angle - yaw)) < np.sin(np.radians(3))  # yaw modulo pi
     assert np.allclose(T[:3, 3], [1.0, 0.2, -0.5], atol=0.1)
-
-
-def _driving_track(steps_o: np.ndarray, yaw0: float = 0.4) -> np.ndarray:
-    """Poses of a track whose frame turns by 1 deg per frame while taking ``steps_o`` (N, 3),
-    each in the object frame of its later row (y: down)."""
-    T = [np.eye(4)]
-    T[0][:3, :3] = _rot_y(yaw0)
-    for k, d in enumerate(steps_o):
-        nxt = np.eye(4)
-        nxt[:3, :3] = _rot_y(yaw0 + np.radians(k + 1))
-        nxt[:3, 3] = T[-1][:3, 3] + nxt[:3, :3] @ d
-        T.append(nxt)
-    return np.array(T)
-
-
-def _rot_y(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-
-
-def test_a_driving_track_s_box_points_where_it_went_even_when_only_its_rear_was_seen():
-    rng = np.random.default_rng(1)
-    heading = np.array([0.6, 0.0, 0.8])  # in the object frame (its first camera's axes)
-    steps = np.tile(0.5 * heading, (20, 1)) + rng.normal(0, 0.03, (20, 3)) * [1, 0, 1]
-    T = _driving_track(steps)
-    got = travel_heading(T, np.arange(21))
-    assert got is not None and np.degrees(np.arccos(got @ heading)) < 3  # with its sign
-    # the rear face alone: 1.8 m across, 0.1 m deep, behind the origin; its principal axis
-    # is the width, at 90 deg from the heading
-    side = np.cross(heading, [0, 1, 0])
-    rear = (rng.uniform(-0.9, 0.9, (300, 1)) * side + rng.uniform(0, 0.1, (300, 1)) * -heading
-            + rng.uniform(-0.7, 0.7, (300, 1)) * [0, 1, 0])
-    T_pca, _ = box_from_points(rear)
-    T_box, size = box_from_points(rear, got)
-    assert abs(T_pca[:3, 0] @ heading) < 0.1  # the wrong axis without the heading
-    assert np.degrees(np.arccos(T_box[:3, 0] @ heading)) < 3  # x: the car's front
-    assert size[1] == pytest.approx(1.8, abs=0.2)  # the width across the heading
-
-
-def test_no_heading_for_jitter_a_short_drive_or_frame_gaps():
-    rng = np.random.default_rng(2)
-    # a parked car's stereo swings along the line of sight: 6 m of path, ~0 net
-    swing = np.diff(1.5 * np.sin(np.linspace(0, 4 * np.pi, 41)))
-    T = _driving_track(np.column_stack([np.full(40, 0.01), np.zeros(40), swing]), yaw0=0.0)
-    assert travel_heading(T, np.arange(41)) is None
-    short = _driving_track(np.tile([0.0, 0.0, 0.5], (5, 1)))  # 2.5 m < 3 m
-    assert travel_heading(short, np.arange(6)) is None
-    assert travel_heading(short, np.arange(6), min_travel_m=2.0) is not None
-    # steps across a gap in the rows are not steps
-    far = _driving_track(np.tile([0.0, 0.0, 0.5], (8, 1)))
-    assert travel_heading(far, np.array([0, 10, 20, 30, 40, 50, 60, 70, 80])) is None
-    assert travel_heading(far[:1], np.arange(1)) is None
-    noisy = rng.normal(0, 1, (21, 4, 4))
-    noisy[:, 3] = [0, 0, 0, 1]
-    noisy[3, 0, 3] = np.nan  # a NaN row's steps are dropped, not propagated
-    got = travel_heading(noisy, np.arange(21), min_travel_m=0.0, min_straightness=0.0)
-    assert got is None or np.isfinite(got).all()
 
 
 def test_run_writes_a_rerun_recording_with_the_objects(sim, tmp_path):

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..datasets import ObjectTable, write_tracking_results
+from .box_heading import BoxHeadingRules, road_side_turns_around, travel_heading
 from .result import TrackedObject
 from .tracking import _image_size, _speed_kmh, in_image
 
@@ -31,36 +32,8 @@ KITTI_TYPES = {24: "Pedestrian", 25: "Cyclist", 26: "Car", 27: "Truck", 28: "Mis
 #: percentiles of the points along each box axis taken as the box's faces: 5 / 95 keeps a
 #: stray background point (a mask's edge) from stretching the box
 EXTENT_PERCENTILES = (5.0, 95.0)
-
-
-def travel_heading(T_w_o: np.ndarray, frames: np.ndarray, min_travel_m: float = 3.0,
-                   min_straightness: float = 0.5) -> np.ndarray | None:
-    """The unit direction (object frame, its x-z plane) a track drove in, or None.
-
-    Parameters
-    ----------
-    T_w_o : (N, 4, 4) poses of the track's rows; frames : (N,) their frame indices (steps are
-        taken between consecutive frames only).
-    min_travel_m : the net displacement (m) the track must have made.
-    min_straightness : ... as a fraction of its path: steps that cancel out are a parked or
-        crawling car's stereo jitter, along the line of sight (as ``visual_objects.
-        travel_min_straightness`` gates the core's travel axis).
-
-    Each step is taken in the object frame of its later row, ``R_w_o^T (t_i - t_{i-1})``, so a
-    car that turns keeps adding along its own heading.
-    """
-    T_w_o = np.asarray(T_w_o, dtype=np.float64).reshape(-1, 4, 4)
-    frames = np.asarray(frames)
-    if len(T_w_o) < 2:
-        return None
-    steps = np.einsum("nji,nj->ni", T_w_o[1:, :3, :3], T_w_o[1:, :3, 3] - T_w_o[:-1, :3, 3])
-    steps = steps[(np.diff(frames) == 1) & np.isfinite(steps).all(axis=1)][:, [0, 2]]
-    net = steps.sum(axis=0)
-    path = np.linalg.norm(steps, axis=1).sum()
-    distance = np.linalg.norm(net)
-    if not (distance >= min_travel_m and distance >= min_straightness * path):
-        return None
-    return np.array([net[0], 0.0, net[1]]) / distance
+#: a box turned by pi about its y axis (its front and back swapped)
+TURN_AROUND = np.diag([-1.0, 1.0, -1.0, 1.0])
 
 
 def box_from_points(points_o: np.ndarray,
@@ -149,11 +122,11 @@ def _rows(obj: TrackedObject, keep: np.ndarray) -> TrackedObject:
 
 
 def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.ndarray],
-                   period: float = 0.1, min_travel_m: float = 3.0,
-                   min_straightness: float = 0.5) -> VisualObjects:
+                   period: float = 0.1,
+                   heading_rules: BoxHeadingRules = BoxHeadingRules()) -> VisualObjects:
     """Convert the core's clusters (``Slam.objects()``) with the run's camera poses
-    (frame -> T_w_c) into :class:`VisualObjects`. ``min_travel_m`` and ``min_straightness``:
-    when a track without a canonical frame counts as driving (:func:`travel_heading`)."""
+    (frame -> T_w_c) into :class:`VisualObjects`. ``heading_rules``: how a track without a
+    canonical frame gets its box's front (:mod:`.box_heading`)."""
     from .. import geometry
 
     calib = getattr(sequence, "calib", None)
@@ -169,8 +142,12 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
             # the object frame is its first detection's box frame; size: the boxes' median
             T_o_box, size = np.eye(4), np.asarray(c["size"], dtype=np.float64)
         else:
-            heading = travel_heading(T_w_o, frames, min_travel_m, min_straightness)
+            heading = travel_heading(T_w_o, frames, heading_rules.min_travel_m,
+                                     heading_rules.min_straightness)
             T_o_box, size = box_from_points(points, heading)
+            if heading is None and road_side_turns_around(
+                    T_w_o @ T_o_box, frames, camera_poses, heading_rules):
+                T_o_box = T_o_box @ TURN_AROUND
         cls = KITTI_TYPES.get(int(c["class_id"]), "Misc")
         T_w_box = T_w_o @ T_o_box
         # the core's flag: a valid twist or a re-seed from the instance seen this frame

@@ -1,0 +1,122 @@
+"""The front of a camera-only track's box (twistslam.objects.box_heading): where it drove, or
+for a parked car the traffic side's rule, and the box that follows from either."""
+
+import numpy as np
+import pytest
+
+from twistslam.objects.box_heading import BoxHeadingRules, road_side_turns_around, travel_heading
+from twistslam.objects.visual import box_from_points
+
+
+def _driving_track(steps_o: np.ndarray, yaw0: float = 0.4) -> np.ndarray:
+    """Poses of a track whose frame turns by 1 deg per frame while taking ``steps_o`` (N, 3),
+    each in the object frame of its later row (y: down)."""
+    T = [np.eye(4)]
+    T[0][:3, :3] = _rot_y(yaw0)
+    for k, d in enumerate(steps_o):
+        nxt = np.eye(4)
+        nxt[:3, :3] = _rot_y(yaw0 + np.radians(k + 1))
+        nxt[:3, 3] = T[-1][:3, 3] + nxt[:3, :3] @ d
+        T.append(nxt)
+    return np.array(T)
+
+
+def _rot_y(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+
+
+def test_a_driving_track_s_box_points_where_it_went_even_when_only_its_rear_was_seen():
+    rng = np.random.default_rng(1)
+    heading = np.array([0.6, 0.0, 0.8])  # in the object frame (its first camera's axes)
+    steps = np.tile(0.5 * heading, (20, 1)) + rng.normal(0, 0.03, (20, 3)) * [1, 0, 1]
+    T = _driving_track(steps)
+    got = travel_heading(T, np.arange(21))
+    assert got is not None and np.degrees(np.arccos(got @ heading)) < 3  # with its sign
+    # the rear face alone: 1.8 m across, 0.1 m deep, behind the origin; its principal axis
+    # is the width, at 90 deg from the heading
+    side = np.cross(heading, [0, 1, 0])
+    rear = (rng.uniform(-0.9, 0.9, (300, 1)) * side + rng.uniform(0, 0.1, (300, 1)) * -heading
+            + rng.uniform(-0.7, 0.7, (300, 1)) * [0, 1, 0])
+    T_pca, _ = box_from_points(rear)
+    T_box, size = box_from_points(rear, got)
+    assert abs(T_pca[:3, 0] @ heading) < 0.1  # the wrong axis without the heading
+    assert np.degrees(np.arccos(T_box[:3, 0] @ heading)) < 3  # x: the car's front
+    assert size[1] == pytest.approx(1.8, abs=0.2)  # the width across the heading
+
+
+def test_no_heading_for_jitter_a_short_drive_or_frame_gaps():
+    rng = np.random.default_rng(2)
+    # a parked car's stereo swings along the line of sight: 6 m of path, ~0 net
+    swing = np.diff(1.5 * np.sin(np.linspace(0, 4 * np.pi, 41)))
+    T = _driving_track(np.column_stack([np.full(40, 0.01), np.zeros(40), swing]), yaw0=0.0)
+    assert travel_heading(T, np.arange(41)) is None
+    short = _driving_track(np.tile([0.0, 0.0, 0.5], (5, 1)))  # 2.5 m < 3 m
+    assert travel_heading(short, np.arange(6)) is None
+    assert travel_heading(short, np.arange(6), min_travel_m=2.0) is not None
+    # steps across a gap in the rows are not steps
+    far = _driving_track(np.tile([0.0, 0.0, 0.5], (8, 1)))
+    assert travel_heading(far, np.array([0, 10, 20, 30, 40, 50, 60, 70, 80])) is None
+    assert travel_heading(far[:1], np.arange(1)) is None
+    noisy = rng.normal(0, 1, (21, 4, 4))
+    noisy[:, 3] = [0, 0, 0, 1]
+    noisy[3, 0, 3] = np.nan  # a NaN row's steps are dropped, not propagated
+    got = travel_heading(noisy, np.arange(21), min_travel_m=0.0, min_straightness=0.0)
+    assert got is None or np.isfinite(got).all()
+
+
+def _camera_poses(n: int) -> dict[int, np.ndarray]:
+    """A camera driving 1 m per frame along the world z (its own forward axis)."""
+    poses = {}
+    for f in range(n):
+        T = np.eye(4)
+        T[2, 3] = float(f)
+        poses[f] = T
+    return poses
+
+
+def _boxes(n: int, lateral_m: float, yaw: float, ahead_m: float = 10.0) -> np.ndarray:
+    """A parked box ``lateral_m`` to the camera's right (x), its x axis at ``yaw`` about y
+    (KITTI: yaw 0 points along the camera's x; -pi/2 along its z, forward)."""
+    T = np.eye(4)
+    T[:3, :3] = _rot_y(yaw)
+    T[:3, 3] = [lateral_m, 1.0, ahead_m]
+    return np.repeat(T[None], n, axis=0)
+
+
+FORWARD, BACKWARD = -np.pi / 2, np.pi / 2  # box x along the camera's +z / -z
+
+
+def test_a_parked_car_faces_the_traffic_of_its_side_of_the_road():
+    rules = BoxHeadingRules()
+    frames = np.arange(5)
+    cams = _camera_poses(5)
+    assert np.allclose(_boxes(1, 4.0, FORWARD)[0][:3, 0], [0, 0, 1], atol=1e-9)
+    # right-hand traffic: on the right a car faces the camera's way, on the left the other
+    assert road_side_turns_around(_boxes(5, 4.0, BACKWARD), frames, cams, rules)
+    assert not road_side_turns_around(_boxes(5, 4.0, FORWARD), frames, cams, rules)
+    assert road_side_turns_around(_boxes(5, -4.0, FORWARD), frames, cams, rules)
+    assert not road_side_turns_around(_boxes(5, -4.0, BACKWARD), frames, cams, rules)
+    left_hand = BoxHeadingRules(road_side=-1)
+    assert road_side_turns_around(_boxes(5, 4.0, FORWARD), frames, cams, left_hand)
+    assert not road_side_turns_around(_boxes(5, 4.0, BACKWARD), frames, cams,
+                                      BoxHeadingRules(road_side=0))
+
+
+def test_no_vote_in_the_camera_s_lane_off_its_road_across_it_or_without_a_camera():
+    rules = BoxHeadingRules()
+    frames = np.arange(5)
+    cams = _camera_poses(5)
+    assert not road_side_turns_around(_boxes(5, 1.0, BACKWARD), frames, cams, rules)  # its lane
+    assert not road_side_turns_around(_boxes(5, 12.0, BACKWARD), frames, cams, rules)  # off road
+    across = _boxes(5, 4.0, BACKWARD + np.radians(50))
+    assert not road_side_turns_around(across, frames, cams, rules)
+    slanted = _boxes(5, 4.0, BACKWARD + np.radians(20))  # within 30 deg: still votes
+    assert road_side_turns_around(slanted, frames, cams, rules)
+    assert not road_side_turns_around(_boxes(5, 4.0, BACKWARD), frames + 100, cams, rules)
+    # the majority of the rows decides: 3 rows against, 2 for (a box that moved across lanes)
+    mixed = np.concatenate([_boxes(3, 4.0, BACKWARD), _boxes(2, -4.0, BACKWARD)])
+    assert road_side_turns_around(mixed, frames, cams, rules)
+    nan = _boxes(5, 4.0, BACKWARD)
+    nan[:, 0, 3] = np.nan  # no finite pose, no vote
+    assert not road_side_turns_around(nan, frames, cams, rules)
