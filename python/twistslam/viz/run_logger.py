@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..objects.box_heading import travel_heading
 from ..objects.visual import KITTI_TYPES, box_from_points
 from .logger import RerunLogger
 from .views import ObjectView
@@ -40,8 +41,10 @@ class RunViewer:
             if not len(frames) or frames[-1] != tracked.index or not c["detected"][-1]:
                 continue
             points = np.asarray(c["points_o"]).reshape(-1, 3)
-            T_o_box, size = box_from_points(points)
-            T_w_o = np.asarray(c["T_w_o"])[-1]
+            T_w_o_rows = np.asarray(c["T_w_o"]).reshape(-1, 4, 4)
+            # as the run's output: the front where the track drove so far (objects/visual.py)
+            T_o_box, size = box_from_points(points, travel_heading(T_w_o_rows, frames))
+            T_w_o = T_w_o_rows[-1]
             speed = 0.0
             if len(frames) > 1:
                 speed = float(np.linalg.norm(np.asarray(c["twist"])[-2][:3]) * 36.0)
