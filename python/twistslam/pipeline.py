@@ -26,7 +26,7 @@ from .datasets import Frame, Sequence, open_sequence
 from .inputs import PanopticLabels, check_stereo, load_frame
 from .input_checks import check_first_frames
 from .progress import RateBar
-from .objects.box_heading import BoxHeadingRules
+from .objects.camera_boxes import CameraBoxRules
 from .objects.visual import visual_objects
 from .result import Result
 from .perception.detection import Detections3D
@@ -271,7 +271,7 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         config=config,
         seq=name,
         objects=(visual_objects(slam.objects(), sequence, camera_poses, period=_period(sequence),
-                                heading_rules=BoxHeadingRules.from_config(config))
+                                box_rules=CameraBoxRules.from_config(config))
                  if perception.segmentation is not None else None),
         segmentation=perception.segmentation_name,
         flow=perception.flow_name,

@@ -8,9 +8,11 @@ that box's (canonical pose) and its size the boxes' median. Without one, its box
 its points in that frame: yaw about the frame's y axis (the first camera's "down") from the
 direction the track drove in (:func:`travel_heading`: its front is where it went), or, for a
 track that did not drive, from the principal axis of the points' x-z coordinates (modulo pi;
-a rear face seen alone gives its width's axis), extents between the 5th and 95th percentile
-along each box axis (robust to the few background points a mask lets in). Reported frames are
-those with a valid twist (eq. 4).
+a rear face seen alone gives its width's axis; a parked car's front by the traffic side's
+rule), extents between the 5th and 95th percentile along each box axis (robust to the few
+background points a mask lets in), a car's length and width at least the car-size prior, grown
+away from the camera (:mod:`.camera_boxes`). Reported frames are those with a valid twist
+(eq. 4).
 """
 
 from __future__ import annotations
@@ -22,7 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from ..datasets import ObjectTable, write_tracking_results
-from .box_heading import BoxHeadingRules, road_side_turns_around, travel_heading
+from .camera_boxes import (CameraBoxRules, complete_car_extent, road_side_turns_around,
+                           travel_heading)
 from .result import TrackedObject
 from .tracking import _image_size, _speed_kmh, in_image
 
@@ -115,6 +118,14 @@ _ROW_FIELDS = ("frames", "T_w_o", "velocity_kmh", "detected", "reported", "score
                "has_box", "T_w_o_online")
 
 
+def _camera_in_object(T_w_o: np.ndarray, frames: np.ndarray,
+                      camera_poses: dict[int, np.ndarray]) -> np.ndarray:
+    """The mean of the rows' camera centres in the object frame (NaN without any)."""
+    centres = [np.linalg.solve(T, np.append(camera_poses[int(f)][:3, 3], 1.0))[:3]
+               for T, f in zip(T_w_o, frames) if int(f) in camera_poses]
+    return np.mean(centres, axis=0) if centres else np.full(3, np.nan)
+
+
 def _rows(obj: TrackedObject, keep: np.ndarray) -> TrackedObject:
     """The track restricted to the rows ``keep`` (bool mask or indices), every per-row array."""
     return dataclasses.replace(obj, **{name: getattr(obj, name)[keep] for name in _ROW_FIELDS
@@ -123,10 +134,10 @@ def _rows(obj: TrackedObject, keep: np.ndarray) -> TrackedObject:
 
 def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.ndarray],
                    period: float = 0.1,
-                   heading_rules: BoxHeadingRules = BoxHeadingRules()) -> VisualObjects:
+                   box_rules: CameraBoxRules = CameraBoxRules()) -> VisualObjects:
     """Convert the core's clusters (``Slam.objects()``) with the run's camera poses
-    (frame -> T_w_c) into :class:`VisualObjects`. ``heading_rules``: how a track without a
-    canonical frame gets its box's front (:mod:`.box_heading`)."""
+    (frame -> T_w_c) into :class:`VisualObjects`. ``box_rules``: how a track without a
+    canonical frame gets its box's front and a car its size (:mod:`.camera_boxes`)."""
     from .. import geometry
 
     calib = getattr(sequence, "calib", None)
@@ -142,12 +153,15 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
             # the object frame is its first detection's box frame; size: the boxes' median
             T_o_box, size = np.eye(4), np.asarray(c["size"], dtype=np.float64)
         else:
-            heading = travel_heading(T_w_o, frames, heading_rules.min_travel_m,
-                                     heading_rules.min_straightness)
+            heading = travel_heading(T_w_o, frames, box_rules.min_travel_m,
+                                     box_rules.min_straightness)
             T_o_box, size = box_from_points(points, heading)
             if heading is None and road_side_turns_around(
-                    T_w_o @ T_o_box, frames, camera_poses, heading_rules):
+                    T_w_o @ T_o_box, frames, camera_poses, box_rules):
                 T_o_box = T_o_box @ TURN_AROUND
+            if KITTI_TYPES.get(int(c["class_id"])) == "Car" and (size > 0).all():
+                T_o_box, size = complete_car_extent(T_o_box, size, _camera_in_object(
+                    T_w_o, frames, camera_poses), box_rules)
         cls = KITTI_TYPES.get(int(c["class_id"]), "Misc")
         T_w_box = T_w_o @ T_o_box
         # the core's flag: a valid twist or a re-seed from the instance seen this frame

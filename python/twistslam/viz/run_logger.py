@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..objects.box_heading import travel_heading
+from ..objects.camera_boxes import travel_heading
 from ..objects.visual import KITTI_TYPES, box_from_points
 from .logger import RerunLogger
 from .views import ObjectView

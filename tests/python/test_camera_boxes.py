@@ -1,10 +1,12 @@
-"""The front of a camera-only track's box (twistslam.objects.box_heading): where it drove, or
-for a parked car the traffic side's rule, and the box that follows from either."""
+"""The box of a camera-only track (twistslam.objects.camera_boxes): its front where it drove,
+or for a parked car by the traffic side's rule, and a car's length and width completed away
+from the camera."""
 
 import numpy as np
 import pytest
 
-from twistslam.objects.box_heading import BoxHeadingRules, road_side_turns_around, travel_heading
+from twistslam.objects.camera_boxes import (CameraBoxRules, complete_car_extent,
+                                           road_side_turns_around, travel_heading)
 from twistslam.objects.visual import box_from_points
 
 
@@ -88,7 +90,7 @@ FORWARD, BACKWARD = -np.pi / 2, np.pi / 2  # box x along the camera's +z / -z
 
 
 def test_a_parked_car_faces_the_traffic_of_its_side_of_the_road():
-    rules = BoxHeadingRules()
+    rules = CameraBoxRules()
     frames = np.arange(5)
     cams = _camera_poses(5)
     assert np.allclose(_boxes(1, 4.0, FORWARD)[0][:3, 0], [0, 0, 1], atol=1e-9)
@@ -97,14 +99,14 @@ def test_a_parked_car_faces_the_traffic_of_its_side_of_the_road():
     assert not road_side_turns_around(_boxes(5, 4.0, FORWARD), frames, cams, rules)
     assert road_side_turns_around(_boxes(5, -4.0, FORWARD), frames, cams, rules)
     assert not road_side_turns_around(_boxes(5, -4.0, BACKWARD), frames, cams, rules)
-    left_hand = BoxHeadingRules(road_side=-1)
+    left_hand = CameraBoxRules(road_side=-1)
     assert road_side_turns_around(_boxes(5, 4.0, FORWARD), frames, cams, left_hand)
     assert not road_side_turns_around(_boxes(5, 4.0, BACKWARD), frames, cams,
-                                      BoxHeadingRules(road_side=0))
+                                      CameraBoxRules(road_side=0))
 
 
 def test_no_vote_in_the_camera_s_lane_off_its_road_across_it_or_without_a_camera():
-    rules = BoxHeadingRules()
+    rules = CameraBoxRules()
     frames = np.arange(5)
     cams = _camera_poses(5)
     assert not road_side_turns_around(_boxes(5, 1.0, BACKWARD), frames, cams, rules)  # its lane
@@ -120,3 +122,46 @@ def test_no_vote_in_the_camera_s_lane_off_its_road_across_it_or_without_a_camera
     nan = _boxes(5, 4.0, BACKWARD)
     nan[:, 0, 3] = np.nan  # no finite pose, no vote
     assert not road_side_turns_around(nan, frames, cams, rules)
+
+
+def _box(yaw: float, centre, size) -> tuple[np.ndarray, np.ndarray]:
+    T = np.eye(4)
+    T[:3, :3] = _rot_y(yaw)
+    T[:3, 3] = centre
+    return T, np.asarray(size, dtype=float)
+
+
+def test_a_car_seen_from_behind_grows_its_hidden_length_away_from_the_camera():
+    rules = CameraBoxRules()  # 4.0 m x 1.65 m
+    # a car ahead (its x axis along the camera's z), its rear 1.2 m of points seen from 15 m
+    T, size = _box(-np.pi / 2, [0.0, 0.0, 15.6], [1.2, 1.7, 1.4])
+    camera = np.zeros(3)
+    T2, size2 = complete_car_extent(T, size, camera, rules)
+    assert size2 == pytest.approx([4.0, 1.7, 1.4])  # the width was seen whole: kept
+    assert T2[:3, 3] == pytest.approx([0.0, 0.0, 15.6 + 1.4])  # its seen face stays at 15 m
+    assert np.allclose(T2[:3, :3], T[:3, :3])
+    # the same car turned around (its front towards the camera): still grows away from it
+    T3, _ = complete_car_extent(_box(np.pi / 2, [0.0, 0.0, 15.6], size)[0], size, camera, rules)
+    assert T3[:3, 3] == pytest.approx([0.0, 0.0, 17.0])
+    # 4 m to the right, seen side-on: only the width is short, it grows further right
+    T4, size4 = complete_car_extent(*_box(-np.pi / 2, [4.0, 0.0, 15.0], [4.3, 0.8, 1.4]),
+                                    np.zeros(3), rules)
+    assert size4 == pytest.approx([4.3, 1.65, 1.4])
+    assert T4[:3, 3] == pytest.approx([4.0 + 0.425, 0.0, 15.0])
+
+
+def test_a_whole_car_or_no_prior_or_a_bad_camera_keeps_the_box():
+    T, size = _box(0.3, [2.0, 0.5, 20.0], [4.4, 1.8, 1.5])
+    T2, size2 = complete_car_extent(T, size, np.zeros(3), CameraBoxRules())
+    assert np.array_equal(T2, T) and np.array_equal(size2, size)
+    short = np.array([2.0, 1.0, 1.5])
+    T3, size3 = complete_car_extent(T, short, np.zeros(3),
+                                    CameraBoxRules(car_length_m=0.0, car_width_m=0.0))
+    assert np.array_equal(T3, T) and np.array_equal(size3, short)
+    T4, size4 = complete_car_extent(T, short, np.full(3, np.nan), CameraBoxRules())
+    assert np.array_equal(T4, T) and np.array_equal(size4, short)
+    # a camera in line with the centre along the length: it grows on both sides
+    T5, size5 = complete_car_extent(*_box(0.0, [0.0, 0.0, 10.0], [2.0, 1.7, 1.5]),
+                                    np.array([0.0, 0.0, 0.0]), CameraBoxRules())
+    assert size5[0] == pytest.approx(4.0) and T5[:3, 3] == pytest.approx([0.0, 0.0, 10.0])
+

@@ -1,5 +1,6 @@
-"""Where the front of a camera-only track's box is (issue 10: a cluster's object frame has no
-canonical heading until a 3D detection gives one).
+"""The box of a camera-only track (issue 10: a cluster's object frame has no canonical pose or
+size until a 3D detection gives them): where its front is, and how long and wide a car is
+whose points show only part of it.
 
 * A track that drove: its front is where it went (:func:`travel_heading`).
 * A track that did not (parked, or too little travel to tell from jitter): its points give an
@@ -8,6 +9,11 @@ canonical heading until a 3D detection gives one).
   road on its right faces the camera's travel, on its left the other way (right-hand traffic).
   Each reported row votes; the box turns around when more rows vote against it than for it
   (:func:`road_side_turns_around`).
+* A car's points cover the faces the camera saw: a car seen from behind spans its width but a
+  fraction of its length, so its box centre sat metres towards the camera. A length or width
+  short of the classical detector's car-size prior (``detection.car_length_m``,
+  ``car_width_m``) grows to it, away from the camera (:func:`complete_car_extent`), as that
+  detector lays a partly seen car's hidden end.
 """
 
 from __future__ import annotations
@@ -18,8 +24,8 @@ import numpy as np
 
 
 @dataclass(frozen=True)
-class BoxHeadingRules:
-    """The thresholds (their configuration keys in brackets)."""
+class CameraBoxRules:
+    """The thresholds and priors (their configuration keys in brackets)."""
 
     min_travel_m: float = 3.0  # net displacement of a driving track (visual_objects.travel_min_path_m)
     min_straightness: float = 0.5  # ... over its path (visual_objects.travel_min_straightness)
@@ -27,13 +33,15 @@ class BoxHeadingRules:
     road_side_min_lateral_m: float = 2.0  # (lidar_objects.road_side_min_lateral_m)
     road_side_max_lateral_m: float = 8.0  # (lidar_objects.road_side_max_lateral_m)
     road_side_max_angle_deg: float = 30.0  # (lidar_objects.road_side_max_angle_deg)
+    car_length_m: float = 4.0  # a car's length at least (detection.car_length_m; 0: none)
+    car_width_m: float = 1.65  # ... and width (detection.car_width_m)
 
     @classmethod
-    def from_config(cls, config) -> "BoxHeadingRules":
-        vo, lo = config.visual_objects, config.lidar_objects
+    def from_config(cls, config) -> "CameraBoxRules":
+        vo, lo, det = config.visual_objects, config.lidar_objects, config.detection
         return cls(vo.travel_min_path_m, vo.travel_min_straightness, lo.road_side_heading,
                    lo.road_side_min_lateral_m, lo.road_side_max_lateral_m,
-                   lo.road_side_max_angle_deg)
+                   lo.road_side_max_angle_deg, det.car_length_m, det.car_width_m)
 
 
 def travel_heading(T_w_o: np.ndarray, frames: np.ndarray, min_travel_m: float = 3.0,
@@ -67,7 +75,7 @@ def travel_heading(T_w_o: np.ndarray, frames: np.ndarray, min_travel_m: float = 
 
 
 def road_side_turns_around(T_w_box: np.ndarray, frames: np.ndarray,
-                           camera_poses: dict[int, np.ndarray], rules: BoxHeadingRules) -> bool:
+                           camera_poses: dict[int, np.ndarray], rules: CameraBoxRules) -> bool:
     """Whether the traffic side's rule says the box (its x axis: the front) faces backwards.
 
     Parameters
@@ -98,3 +106,32 @@ def road_side_turns_around(T_w_box: np.ndarray, frames: np.ndarray,
         facing = np.sign(lateral) * rules.road_side  # +1: the camera's way
         votes += 1 if along * facing > 0 else -1
     return votes < 0
+
+
+def complete_car_extent(T_o_box: np.ndarray, size: np.ndarray, camera_o: np.ndarray,
+                        rules: CameraBoxRules) -> tuple[np.ndarray, np.ndarray]:
+    """``(T_o_box, size)`` with a length or width short of the car-size prior grown to it.
+
+    Parameters
+    ----------
+    T_o_box : (4, 4) the box in its object frame (x = length, y = down, z = width).
+    size : (3,) its (l, w, h) in metres.
+    camera_o : (3,) where the camera saw it from, in the object frame (e.g. the mean of its
+        rows' camera centres).
+    rules : ``car_length_m`` and ``car_width_m``; 0 leaves that extent as measured.
+
+    The face nearer the camera is the seen one and stays; the box grows away from it. A camera
+    exactly in line with the box's centre along an axis grows that extent on both sides.
+    """
+    T, size = np.array(T_o_box, dtype=np.float64), np.array(size, dtype=np.float64)
+    if not (np.isfinite(T).all() and np.isfinite(size).all() and np.isfinite(camera_o).all()):
+        return T, size
+    camera_box = T[:3, :3].T @ (np.asarray(camera_o, dtype=np.float64) - T[:3, 3])
+    for axis, extent, prior in ((0, 0, rules.car_length_m), (2, 1, rules.car_width_m)):
+        grow = prior - size[extent]
+        if not (prior > 0 and grow > 0):
+            continue
+        # the centre moves half the growth away from the camera, along the box's axis
+        T[:3, 3] -= np.sign(camera_box[axis]) * 0.5 * grow * T[:3, axis]
+        size[extent] = prior
+    return T, size
