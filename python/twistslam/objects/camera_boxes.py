@@ -7,7 +7,7 @@ whose points show only part of it.
   axis modulo pi only, and the traffic side's rule (the one ``lidar_objects.road_side_heading``
   applies to the classical detector's boxes) picks the end: a car parked along the camera's
   road on its right faces the camera's travel, on its left the other way (right-hand traffic).
-  Each reported row votes; the box turns around when more rows vote against it than for it
+  Each row votes; the box turns around when more rows vote against it than for it
   (:func:`road_side_turns_around`).
 * A car's points cover the faces the camera saw: a car seen from behind spans its width but a
   fraction of its length, so its box centre sat metres towards the camera. A length or width
