@@ -35,7 +35,8 @@ median flow ms, the loop's Hz and the final smoothing's ms (once, after the loop
 yet prints "not available" and the reason.
 
 Issue 11's figures, per row: the canonical ATE / RPE columns (no offset, no alignment), the
-mean yaw error of the canonical tracks (deg, modulo 2 pi), and the 3D TP rate and 3D MOTP
+mean yaw error of the canonical tracks (deg, modulo 2 pi; in the camera-only rows, of the
+boxes the output gives camera-only tracks), and the 3D TP rate and 3D MOTP
 (percent) of the run's KITTI tracking boxes (what ``twistslam run --out`` writes) scored by
 ``twistslam eval``'s evaluator against ``label_02`` (moderate level, IoU 0.25), means over the
 same moving cars. At the end: each row's means over the sequences against the issue's
@@ -305,6 +306,15 @@ def per_object_ms(result) -> dict[str, float]:
     return out
 
 
+def camera_box_frames(row: Row, objects, canonical: set[int]) -> dict[int, np.ndarray] | None:
+    """The camera-only rows' box frames (their yaw is the boxes' heading rules,
+    :mod:`twistslam.objects.camera_boxes`); None for the rows with 3D boxes, whose yaw column
+    stays issue 11's figure (canonical tracks only)."""
+    if row.detector != "none":
+        return None
+    return {tid: T for tid, T in getattr(objects, "T_o_box", {}).items() if tid not in canonical}
+
+
 def median_stage(result, word: str) -> float:
     values = [ms for name, ms in result.timings.stages.items() if word in name]
     finite = np.concatenate(values)[np.isfinite(np.concatenate(values))] if values else []
@@ -314,7 +324,7 @@ def median_stage(result, word: str) -> float:
 HEADER = (f"{'scenario':<14} {'row':<10} {'RPE_t':>6} {'RPE_r':>6} {'ATE_al':>6} "
           f"{'tracked':>8} {'ghosts':>6} {'camATE':>7} {'camRPEt':>8} {'camRPEr':>8} "
           f"{'flow ms':>7} {'Hz':>6}  object ms/obj/frame; canonical RPE_t RPE_r ATE; "
-          f"yaw deg (canonical tracks); TP3D MOTP3D %")
+          f"yaw deg (canonical tracks; camera rows: their boxes); TP3D MOTP3D %")
 
 
 def format_row(label: str, name: str, ev, cam, result, figures: dict[str, float]) -> str:
@@ -391,10 +401,13 @@ def main(argv: list[str] | None = None) -> int:
                         continue
                 if args.gt_as_estimate:  # the config does not matter here
                     result = gt_as_estimate(gt, np.random.default_rng(seed))
+                canonical = canonical_track_ids(result.objects)
                 ev = evaluate_object_tracks(result.objects.reported(), result.camera_poses, gt,
                                             max_occlusion=args.max_occlusion,
                                             max_truncation=args.max_truncation,
-                                            canonical_ids=canonical_track_ids(result.objects))
+                                            canonical_ids=canonical,
+                                            box_frames=camera_box_frames(row, result.objects,
+                                                                         canonical))
                 cam = evaluate_camera(gt_cam, result.camera_poses)
                 row_figures = figures.setdefault(label, {})[name] = issue11_figures(root, result, ev)
                 print(format_row(label, name, ev, cam, result, row_figures), flush=True)

@@ -81,6 +81,28 @@ def test_yaw_error_only_for_canonical_tracks():
     assert evaluate_object_tracks([est], A @ gt.T_w_c, gt).cars[0].yaw_deg == pytest.approx(30.0)
 
 
+def test_yaw_error_of_a_camera_only_track_from_its_box_frame():
+    gt, A = synthetic_world()
+    # a cluster's object frame keeps the world axes at birth; its box frame carries the
+    # heading the output gave it (objects/camera_boxes.py), 5 deg off here
+    T_o_box = pose(-90.0 + 5.0)
+    T_w_o = A @ gt.tracks[7].T_w_o @ np.linalg.inv(T_o_box) @ pose(5.0)
+    est = estimate(70, T_w_o)
+    plain = evaluate_object_tracks([est], A @ gt.T_w_c, gt, canonical_ids=[])
+    assert np.isnan(plain.cars[0].yaw_deg)  # no box frame: not evaluated
+    ev = evaluate_object_tracks([est], A @ gt.T_w_c, gt, canonical_ids=[],
+                                box_frames={70: T_o_box})
+    assert ev.cars[0].yaw_deg == pytest.approx(5.0, abs=1e-6)
+    turned = evaluate_object_tracks([est], A @ gt.T_w_c, gt, canonical_ids=[],
+                                    box_frames={70: T_o_box @ pose(180.0)})
+    assert turned.cars[0].yaw_deg == pytest.approx(175.0, abs=1e-6)
+    # a canonical track's own frame is its box: box_frames does not apply to it
+    canon = evaluate_object_tracks([est], A @ gt.T_w_c, gt, canonical_ids=[70],
+                                   box_frames={70: T_o_box})
+    assert canon.cars[0].yaw_deg == pytest.approx(
+        evaluate_object_tracks([est], A @ gt.T_w_c, gt).cars[0].yaw_deg)
+
+
 def boxes(frames, track_ids, x, z, ry, score=None):
     """An ObjectTable of cars: geometric centre (x, 1.0, z) in the camera frame, size SIZE."""
     n = len(frames)

@@ -201,9 +201,11 @@ class ObjectTrackEvaluation:
 
 def _car_row(gt: SequenceGroundTruth, car: GtTrack, frames: np.ndarray,
              mapped: dict[int, tuple], margin_m: float,
-             canonical_ids: set[int] | None = None) -> CarTrackRow:
+             canonical_ids: set[int] | None = None,
+             box_frames: dict[int, np.ndarray] | None = None) -> CarTrackRow:
     """Coverage and errors of one car; ``mapped`` = estimated tracks in the GT world;
-    ``canonical_ids``: the tracks whose yaw is evaluated (None: every track)."""
+    ``canonical_ids``: the tracks whose yaw is evaluated (None: every track);
+    ``box_frames``: other tracks' ``T_o_box``, whose yaw is evaluated with it."""
     half = car.half_extents()
     row_of = {int(f): k for k, f in enumerate(car.frames)}
     hits: dict[int, set[int]] = {}
@@ -234,6 +236,9 @@ def _car_row(gt: SequenceGroundTruth, car: GtTrack, frames: np.ndarray,
                       rpe_t_canonical=canonical.rpe_t, rpe_r_canonical=canonical.rpe_r, offset=offset)
         if canonical_ids is None or order[0] in canonical_ids:
             values["yaw_deg"] = mean_yaw_error_deg(T_c_w @ gt_poses, T_c_w @ poses[ei])
+        elif box_frames and order[0] in box_frames:
+            values["yaw_deg"] = mean_yaw_error_deg(T_c_w @ gt_poses,
+                                                   T_c_w @ poses[ei] @ box_frames[order[0]])
     return CarTrackRow(gt_id=car.track_id, frames=len(frames),
                        coverage=len(covered) / len(frames), est_ids=order, **values)
 
@@ -271,7 +276,8 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
                            min_box_height_px: float = MIN_BOX_HEIGHT_PX,
                            max_occlusion: int = MAX_OCCLUSION,
                            max_truncation: int = MAX_TRUNCATION,
-                           canonical_ids=None) -> ObjectTrackEvaluation:
+                           canonical_ids=None,
+                           box_frames: dict[int, np.ndarray] | None = None) -> ObjectTrackEvaluation:
     """Evaluate estimated object tracks against the simulator's ground truth.
 
     Parameters
@@ -289,6 +295,9 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
     canonical_ids : ids of the estimated tracks whose object frame is their box frame (LiDAR
         fusion); only their yaw error is evaluated. None: every track's (the caller knows
         its frames are box frames).
+    box_frames : track id -> ``T_o_box`` (4, 4), the box a track without a canonical frame
+        was given in its object frame (``VisualObjects.T_o_box``, camera-only boxes): those
+        tracks' yaw is evaluated too, from ``T_w_o @ T_o_box``. None: not evaluated.
     """
     camera_poses = np.asarray(camera_poses, dtype=np.float64)
     mapped = {}
@@ -299,7 +308,8 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
     cars = evaluated_cars(gt, min_frames, max_range_m, min_box_height_px, max_occlusion,
                           max_truncation)
     canonical = None if canonical_ids is None else {int(i) for i in canonical_ids}
-    rows = [_car_row(gt, gt.tracks[tid], frames, mapped, margin_m, canonical)
+    boxes = {int(k): np.asarray(v, dtype=np.float64) for k, v in (box_frames or {}).items()}
+    rows = [_car_row(gt, gt.tracks[tid], frames, mapped, margin_m, canonical, boxes)
             for tid, frames in cars.items()]
     return ObjectTrackEvaluation(cars=rows, ghost_ids=ghost_tracks(gt, mapped, margin_m))
 
