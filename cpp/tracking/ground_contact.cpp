@@ -33,10 +33,17 @@ GroundContact ground_contact_depth(const cv::Mat& instances, const cv::Mat& labe
   std::vector<double> depths;
   for (int u = 0; u < cols; ++u) {
     if (bottom[u] < 0) continue;
-    ++out.mask_columns;
-    bool road = false;
-    for (int v = bottom[u] + 1; v <= std::min(rows - 1, bottom[u] + max_gap_px + 1) && !road; ++v)
+    bool road = false, hidden = false;
+    for (int v = bottom[u] + 1; v <= std::min(rows - 1, bottom[u] + max_gap_px + 1) && !road; ++v) {
       road = labels.at<int>(v, u) == road_class_id;
+      const int below = instances.at<int>(v, u);
+      hidden = hidden || (below != 0 && below != instance);
+    }
+    if (hidden && !road) {
+      ++out.hidden_columns;
+      continue;
+    }
+    ++out.mask_columns;
     if (!road) continue;
     // the ray through the pixel's lower edge: X_c = z * ray, n_c . X_c + d_c = 0
     const Vec3 ray = camera.backproject(Vec2(u, bottom[u] + 0.5), 1.0);  // pixel centres at integers

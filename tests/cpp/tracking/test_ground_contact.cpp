@@ -1,7 +1,7 @@
 // The ground-contact depth of an instance (tracking/ground_contact.hpp): a car mask standing
 // on the road gives the depth of its lower edge on the road plane; a mask whose lower edge is
-// hidden (no road below it), or shows road below only at a few columns, gives none; bad
-// images give none rather than throwing.
+// hidden (no road below it), or shows road below only at a few columns, gives none, unless the
+// other columns rest on another instance (a queue); bad images give none rather than throwing.
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
@@ -83,6 +83,47 @@ TEST(GroundContact, HiddenLowerEdgeGivesNoDepth) {
   sky.instances(cv::Range(50, 100), cv::Range(500, 600)).setTo(kInstance);
   EXPECT_FALSE(ground_contact_depth(sky.instances, sky.labels, kInstance, kRoad, cam,
                                     Mat4::Identity(), kRoadPlane, 5, 0.5, 60.0).valid);
+}
+
+TEST(GroundContact, ColumnsHiddenBehindAnotherInstanceDoNotCount) {
+  const geometry::StereoCamera cam = test_scenes::kitti_camera();
+  constexpr int kNearer = 26002, kSidewalk = 8;
+  // the car queued behind a nearer car (an instance of its own) that covers the lower part
+  // of 90 of its 100 columns: the 10 columns with road below are its own contact
+  Images queued = car_on_road(cam, 14.0, 500, 600);
+  for (int v = static_cast<int>(cam.cy) + 1; v < cam.height; ++v)
+    for (int u = 510; u < 600; ++u)
+      if (queued.instances.at<int>(v, u) != kInstance) {
+        queued.instances.at<int>(v, u) = kNearer;
+        queued.labels.at<int>(v, u) = kCar;
+      }
+  const GroundContact c = ground_contact_depth(queued.instances, queued.labels, kInstance, kRoad,
+                                               cam, Mat4::Identity(), kRoadPlane, 5, 0.5, 60.0);
+  ASSERT_TRUE(c.valid);
+  EXPECT_EQ(c.columns, 10);
+  EXPECT_EQ(c.hidden_columns, 90);
+  EXPECT_EQ(c.mask_columns, 10);
+  EXPECT_NEAR(c.depth, 14.0, 0.5 * 14.0 * 14.0 / (cam.fy * 1.65) + 1e-6);
+  // still at least min_columns: 4 columns of road are not enough
+  for (int v = static_cast<int>(cam.cy) + 1; v < cam.height; ++v)
+    for (int u = 504; u < 510; ++u)
+      if (queued.instances.at<int>(v, u) != kInstance) {
+        queued.instances.at<int>(v, u) = kNearer;
+        queued.labels.at<int>(v, u) = kCar;
+      }
+  EXPECT_FALSE(ground_contact_depth(queued.instances, queued.labels, kInstance, kRoad, cam,
+                                    Mat4::Identity(), kRoadPlane, 5, 0.5, 60.0).valid);
+  // the same car with sidewalk (no instance) below those 90 columns: parked on the kerb, its
+  // few road columns do not count as a contact
+  Images kerb = car_on_road(cam, 14.0, 500, 600);
+  for (int v = static_cast<int>(cam.cy) + 1; v < cam.height; ++v)
+    for (int u = 510; u < 600; ++u)
+      if (kerb.instances.at<int>(v, u) != kInstance) kerb.labels.at<int>(v, u) = kSidewalk;
+  const GroundContact on_kerb = ground_contact_depth(kerb.instances, kerb.labels, kInstance, kRoad,
+                                                     cam, Mat4::Identity(), kRoadPlane, 5, 0.5, 60.0);
+  EXPECT_FALSE(on_kerb.valid);
+  EXPECT_EQ(on_kerb.hidden_columns, 0);
+  EXPECT_EQ(on_kerb.mask_columns, 100);
 }
 
 TEST(GroundContact, BadInputGivesNoDepth) {
