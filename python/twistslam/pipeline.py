@@ -224,7 +224,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     if viz or viz_save is not None:
         from .viz.run_logger import RunViewer
 
-        viewer = RunViewer(sequence, spawn=viz, save=viz_save)
+        viewer = RunViewer(sequence, spawn=viz, save=viz_save,
+                           box_rules=CameraBoxRules.from_config(config))
     tracked, stages, frame_ms = [], [], []
     with RateBar(len(indices), f"seq {name}" if name else "run", enabled=progress) as bar:
         last = time.perf_counter()

@@ -7,7 +7,7 @@ import pytest
 
 from twistslam.objects.camera_boxes import (CameraBoxRules, complete_car_extent,
                                            road_side_turns_around, travel_heading)
-from twistslam.objects.visual import box_from_points
+from twistslam.objects.visual import box_from_points, cluster_box
 
 
 def _driving_track(steps_o: np.ndarray, yaw0: float = 0.4) -> np.ndarray:
@@ -165,3 +165,32 @@ def test_a_whole_car_or_no_prior_or_a_bad_camera_keeps_the_box():
                                     np.array([0.0, 0.0, 0.0]), CameraBoxRules())
     assert size5[0] == pytest.approx(4.0) and T5[:3, 3] == pytest.approx([0.0, 0.0, 10.0])
 
+
+
+def test_the_output_and_the_live_view_box_of_a_cluster():
+    """``cluster_box`` (what the output and the ``--viz`` view draw): a canonical track is its
+    own box, whatever its points; any other car is fitted to its points and completed."""
+    rng = np.random.default_rng(1)
+    # a car 15 m ahead, its length along the camera's z: its rear face (1.7 m wide) and the
+    # first 3 m of its left side seen
+    u = rng.uniform(-0.5, 0.5, (2, 300))
+    rear = np.column_stack([1.7 * u[0], 1.4 * u[1], np.full(300, -1.5)])
+    side = np.column_stack([np.full(300, -0.85), 1.4 * u[1], -1.5 + 3.0 * (u[0] + 0.5)])
+    rear = np.vstack([rear, side])
+    frames = np.arange(3)
+    T_w_o = np.repeat(np.eye(4)[None], 3, axis=0)
+    T_w_o[:, :3, 3] = [0.0, 0.0, 15.6]
+    cameras = {int(f): np.eye(4) for f in frames}
+    cluster = {"frames": frames, "T_w_o": T_w_o, "points_o": rear, "class_id": 26,
+               "canonical": True, "size": np.array([4.4, 1.8, 1.5])}
+    T_o_box, size, canonical = cluster_box(cluster, cameras)
+    assert canonical and np.array_equal(T_o_box, np.eye(4))
+    assert size == pytest.approx([4.4, 1.8, 1.5])
+    # without a canonical frame (or without sizes): the points' box, grown to a car's length
+    for fitted in ({**cluster, "canonical": False}, {**cluster, "size": np.zeros(3)}):
+        T_o_box, size, canonical = cluster_box(fitted, cameras)
+        assert not canonical
+        assert size[0] == pytest.approx(4.0) and size[1] == pytest.approx(1.7, abs=0.1)
+        assert abs(T_o_box[0, 2]) > 0.99  # its length along the object's z
+        # the seen rear face stays 1.5 m before the origin; the box grows away from the camera
+        assert T_o_box[:3, 3] == pytest.approx([0.0, 0.0, -1.5 + 2.0], abs=0.1)

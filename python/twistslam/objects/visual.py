@@ -132,6 +132,31 @@ def _rows(obj: TrackedObject, keep: np.ndarray) -> TrackedObject:
                                        if getattr(obj, name) is not None})
 
 
+def cluster_box(cluster: dict, camera_poses: dict[int, np.ndarray],
+                box_rules: CameraBoxRules = CameraBoxRules()) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``(T_o_box, size, canonical)`` of one of the core's clusters (``Slam.objects()``), with
+    the camera poses (frame -> T_w_c) of its rows so far: a track with a canonical frame (a
+    3D box's) and sizes is its own box; any other gets a box fitted to its points, its front
+    where it drove or by the road side's rule, a car its full extent (:mod:`.camera_boxes`).
+    What the run's output and the live view both draw."""
+    frames = np.asarray(cluster["frames"])
+    T_w_o = np.asarray(cluster["T_w_o"]).reshape(-1, 4, 4)
+    if bool(cluster.get("canonical")) and bool((np.asarray(cluster["size"]) > 0).all()):
+        # the object frame is its first detection's box frame; size: the boxes' median
+        return np.eye(4), np.asarray(cluster["size"], dtype=np.float64), True
+    points = np.asarray(cluster["points_o"]).reshape(-1, 3)
+    heading = travel_heading(T_w_o, frames, box_rules.min_travel_m, box_rules.min_straightness)
+    T_o_box, size = box_from_points(points, heading)
+    if heading is None and road_side_turns_around(T_w_o @ T_o_box, frames, camera_poses,
+                                                  box_rules):
+        T_o_box = T_o_box @ TURN_AROUND
+    if KITTI_TYPES.get(int(cluster["class_id"])) == "Car" and (size > 0).all():
+        T_o_box, size = complete_car_extent(T_o_box, size,
+                                            _camera_in_object(T_w_o, frames, camera_poses),
+                                            box_rules)
+    return T_o_box, size, False
+
+
 def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.ndarray],
                    period: float = 0.1,
                    box_rules: CameraBoxRules = CameraBoxRules()) -> VisualObjects:
@@ -148,20 +173,7 @@ def visual_objects(clusters: list[dict], sequence, camera_poses: dict[int, np.nd
         frames = np.asarray(c["frames"])
         T_w_o = np.asarray(c["T_w_o"]).reshape(-1, 4, 4)
         points = np.asarray(c["points_o"]).reshape(-1, 3)
-        canonical = bool(c.get("canonical")) and bool((np.asarray(c["size"]) > 0).all())
-        if canonical:
-            # the object frame is its first detection's box frame; size: the boxes' median
-            T_o_box, size = np.eye(4), np.asarray(c["size"], dtype=np.float64)
-        else:
-            heading = travel_heading(T_w_o, frames, box_rules.min_travel_m,
-                                     box_rules.min_straightness)
-            T_o_box, size = box_from_points(points, heading)
-            if heading is None and road_side_turns_around(
-                    T_w_o @ T_o_box, frames, camera_poses, box_rules):
-                T_o_box = T_o_box @ TURN_AROUND
-            if KITTI_TYPES.get(int(c["class_id"])) == "Car" and (size > 0).all():
-                T_o_box, size = complete_car_extent(T_o_box, size, _camera_in_object(
-                    T_w_o, frames, camera_poses), box_rules)
+        T_o_box, size, canonical = cluster_box(c, camera_poses, box_rules)
         cls = KITTI_TYPES.get(int(c["class_id"]), "Misc")
         T_w_box = T_w_o @ T_o_box
         # the core's flag: a valid twist or a re-seed from the instance seen this frame

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..objects.camera_boxes import travel_heading
-from ..objects.visual import KITTI_TYPES, box_from_points
+from ..objects.camera_boxes import CameraBoxRules
+from ..objects.visual import KITTI_TYPES, cluster_box
 from .logger import RerunLogger
 from .views import ObjectView
 
@@ -20,10 +20,13 @@ STATIC_POINTS_EVERY = 10
 class RunViewer:
     """Logs each frame of a run: image, segmentation, camera, object clusters, stage times."""
 
-    def __init__(self, sequence, *, spawn: bool = False, save: str | Path | None = None) -> None:
+    def __init__(self, sequence, *, spawn: bool = False, save: str | Path | None = None,
+                 box_rules: CameraBoxRules = CameraBoxRules()) -> None:
         self.logger = RerunLogger(spawn=spawn, save=save)
         self.sequence = sequence
+        self.box_rules = box_rules
         self._camera_logged = False
+        self._camera_poses: dict[int, np.ndarray] = {}  # frame -> T_w_c, the rows so far
 
     def log(self, item, tracked, slam) -> None:
         frame = item.frame
@@ -36,14 +39,15 @@ class RunViewer:
             self._camera_logged = True
         views = []
         T_c_w = np.linalg.inv(tracked.T_w_c)
+        self._camera_poses[int(tracked.index)] = np.asarray(tracked.T_w_c)
         for c in slam.objects():
             frames = np.asarray(c["frames"])
             if not len(frames) or frames[-1] != tracked.index or not c["detected"][-1]:
                 continue
             points = np.asarray(c["points_o"]).reshape(-1, 3)
             T_w_o_rows = np.asarray(c["T_w_o"]).reshape(-1, 4, 4)
-            # as the run's output: the front where the track drove so far (objects/visual.py)
-            T_o_box, size = box_from_points(points, travel_heading(T_w_o_rows, frames))
+            # the run's output box (objects/visual.py): a canonical track's own, else fitted
+            T_o_box, size, _ = cluster_box(c, self._camera_poses, self.box_rules)
             T_w_o = T_w_o_rows[-1]
             speed = 0.0
             if len(frames) > 1:
