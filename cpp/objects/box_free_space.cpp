@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace twistslam::objects {
 
@@ -50,6 +51,26 @@ BoxRayCounts count_box_rays(const Points3& scan_c, const Mat4& T_c_o, const Vec3
     if (hit && t_out < 1) ++counts.through;
   }
   return counts;
+}
+
+Points3 returns_near_box_rays(const Points3& scan_c, const Mat4& T_c_o, const Vec3& size_lwh,
+                              const Vec3& sensor_c, double reach_m) {
+  // any such box lies in the sphere of the box's bounding radius plus the reach
+  const double radius = 0.5 * size_lwh.norm() + std::max(0.0, reach_m);
+  const Vec3 to_centre = T_c_o.topRightCorner<3, 1>() - sensor_c;
+  const double centre_range = to_centre.norm();
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index i = 0; i < scan_c.rows(); ++i) {
+    const Vec3 d = scan_c.row(i).transpose() - sensor_c;
+    const double range = d.norm();
+    if (!std::isfinite(range) || range < centre_range - radius || !(range > 0)) continue;
+    const double along = d.dot(to_centre) / range;
+    if (along <= 0 || centre_range * centre_range - along * along > radius * radius) continue;
+    kept.push_back(i);
+  }
+  Points3 out(static_cast<Eigen::Index>(kept.size()), 3);
+  for (size_t k = 0; k < kept.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = scan_c.row(kept[k]);
+  return out;
 }
 
 }  // namespace twistslam::objects

@@ -20,4 +20,10 @@ struct BoxRayCounts {
 BoxRayCounts count_box_rays(const Points3& scan_c, const Mat4& T_c_o, const Vec3& size_lwh,
                             const Vec3& sensor_c, double shrink_m);
 
+// The returns of scan_c that count_box_rays may count (inside or through) for a box of that
+// size whose centre lies within reach_m of T_c_o's: enough to take the test again after the
+// box moved by up to reach_m (a track's pose refined later), without the whole scan.
+Points3 returns_near_box_rays(const Points3& scan_c, const Mat4& T_c_o, const Vec3& size_lwh,
+                              const Vec3& sensor_c, double reach_m);
+
 }  // namespace twistslam::objects

@@ -53,6 +53,11 @@ struct TrackFrame {
   // moves along it as an open end does (open_shift_m).
   Vec3 far_end_w = Vec3::Zero();
   bool reported = false;          // part of the output (set by the tracker's output policy)
+  // not reported because the LiDAR saw through its box (tracking/object_free_space.cpp): the
+  // returns around the box's rays then (camera frame), to take the test again with the final
+  // pose; empty otherwise
+  Points3 see_through_returns;
+  Vec3 see_through_centre_c = Vec3::Zero();  // the box centre (camera frame) then
   // LiDAR registration (eq. 6-7): the object's motion in w from the previous frame to this
   // one, T_w_o(this) = M_w_registered T_w_o(previous), measured by GICP of the object scans
   bool registered = false;

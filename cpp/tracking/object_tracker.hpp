@@ -28,6 +28,7 @@
 
 #include "geometry/stereo_camera.hpp"
 #include "lidar/scan_projection.hpp"
+#include "objects/box_free_space.hpp"
 #include "objects/instance_association.hpp"
 #include "objects/object_cluster.hpp"
 #include "objects/object_track.hpp"
@@ -187,6 +188,13 @@ class ObjectTracker : public ObjectBundleTerms {
   // A canonical track without a box this frame whose box the LiDAR sees through (returns
   // beyond it on rays crossing it, few inside) is not reported in it (object_free_space.cpp).
   void hide_see_through_tracks(const Frame& frame);
+  // The rows it hid take the test again with their final poses (T_c_w_of_frame: the refined
+  // cameras; a frame missing there keeps the row's own), on the returns kept with them;
+  // reported again where the box is no longer seen through. Called by smooth_tracks.
+  void retest_see_through(const std::map<int, Mat4>& T_c_w_of_frame);
+  bool see_through(const objects::BoxRayCounts& counts) const;
+  // how far (m) a hidden row's box may move before its kept returns no longer cover the test
+  static constexpr double kSeeThroughRetestReachM = 3.0;
   // A track of small_object_class_ids without a box this frame, farther than
   // small_object_report_max_depth_m, is not reported in it (object_report_range.cpp).
   void hide_far_small_tracks(const Frame& frame);

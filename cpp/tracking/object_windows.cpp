@@ -245,7 +245,10 @@ void ObjectTracker::refine_window(int c) {
 
 ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_c_w_of_frame) {
   ObjectSmoothingReport report;
-  if (!options_.final_smoothing) return report;
+  if (!options_.final_smoothing) {
+    retest_see_through(T_c_w_of_frame);
+    return report;
+  }
   for (int c = 0; c < static_cast<int>(tracks_.size()); ++c) {
     objects::ObjectTrack& track = tracks_[c];
     const int rows = static_cast<int>(track.frames.size());
@@ -298,6 +301,7 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
     ++report.num_tracks;
     report.num_residuals += s.num_residuals;
   }
+  retest_see_through(T_c_w_of_frame);
   return report;
 }
 

@@ -76,3 +76,27 @@ TEST(BoxFreeSpace, AHiddenBoxHasNoVerdictAndBadRowsAreSkipped) {
   EXPECT_EQ(count_box_rays(Points3(0, 3), box_at(Vec3(0, 0.8, 20.0)), kSize, Vec3::Zero(), 0.3).through, 0);
   EXPECT_EQ(count_box_rays(to_matrix(points), box_at(Vec3(0, 0, 0.5)), kSize, Vec3::Zero(), 0.3).through, 0);
 }
+
+TEST(BoxFreeSpace, TheReturnsKeptAroundABoxRetakeTheTestForABoxMovedWithinTheReach) {
+  // a scene with the car's side at 15 m, a wall at 30 m and returns far off to both sides
+  std::vector<Vec3> points;
+  add_plane(&points, 15.05, -2.2, 2.2, 0.1, 1.5);
+  add_plane(&points, 30.0, -8.0, 8.0, -1.0, 1.5);
+  add_plane(&points, 12.0, -30.0, -20.0, -1.0, 1.5);
+  add_plane(&points, 12.0, 20.0, 30.0, -1.0, 1.5);
+  const Points3 scan = to_matrix(points);
+  const Mat4 hidden_at = box_at(Vec3(5.0, 0.8, 22.0));  // the see-through box of the test above
+  const Points3 kept = returns_near_box_rays(scan, hidden_at, kSize, Vec3::Zero(), 3.0);
+  EXPECT_LT(kept.rows(), scan.rows() / 2);  // the returns far to the sides are left out
+  // every box within the reach counts the same on the kept returns as on the whole scan:
+  // moved onto the car (no longer seen through), along the ray, or sideways
+  for (const Vec3& shift : {Vec3(0, 0, 0), Vec3(-2.0, 0, -1.5), Vec3(0, 0, 2.9), Vec3(2.9, 0, 0),
+                            Vec3(-1.5, 0.3, 2.5)}) {
+    const Mat4 moved = box_at(Vec3(5.0, 0.8, 22.0) + shift);
+    const BoxRayCounts all = count_box_rays(scan, moved, kSize, Vec3::Zero(), 0.3);
+    const BoxRayCounts sub = count_box_rays(kept, moved, kSize, Vec3::Zero(), 0.3);
+    EXPECT_EQ(sub.inside, all.inside) << shift.transpose();
+    EXPECT_EQ(sub.through, all.through) << shift.transpose();
+  }
+  EXPECT_EQ(returns_near_box_rays(Points3(0, 3), hidden_at, kSize, Vec3::Zero(), 3.0).rows(), 0);
+}
