@@ -10,7 +10,8 @@ GroundContact ground_contact_depth(const cv::Mat& instances, const cv::Mat& labe
                                    int instance, int road_class_id,
                                    const geometry::StereoCamera& camera, const Mat4& T_w_c,
                                    const Vec4& plane_w, int min_columns, double min_fraction,
-                                   double max_depth_m, int max_gap_px) {
+                                   double max_depth_m, int max_gap_px,
+                                   double depth_quantile) {
   GroundContact out;
   if (instances.empty() || labels.empty() || instances.type() != CV_32SC1 ||
       labels.type() != CV_32SC1 || instances.size() != labels.size() || instance <= 0 ||
@@ -55,8 +56,10 @@ GroundContact ground_contact_depth(const cv::Mat& instances, const cv::Mat& labe
   out.columns = static_cast<int>(depths.size());
   if (out.columns < std::max(1, min_columns) || out.columns < min_fraction * out.mask_columns)
     return out;
-  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
-  out.depth = depths[depths.size() / 2];
+  const size_t k = std::min(depths.size() - 1,
+                            static_cast<size_t>(std::clamp(depth_quantile, 0.0, 1.0) * depths.size()));
+  std::nth_element(depths.begin(), depths.begin() + k, depths.end());
+  out.depth = depths[k];
   out.valid = true;
   return out;
 }

@@ -39,6 +39,7 @@ GroundContact ground_contact_depth(const cv::Mat& instances, const cv::Mat& labe
                                    int instance, int road_class_id,
                                    const geometry::StereoCamera& camera, const Mat4& T_w_c,
                                    const Vec4& plane_w, int min_columns, double min_fraction,
-                                   double max_depth_m, int max_gap_px = 2);
+                                   double max_depth_m, int max_gap_px = 2,
+                                   double depth_quantile = 0.5);
 
 }  // namespace twistslam::tracking

@@ -35,6 +35,7 @@ struct ObjectTrackingOptions {
   bool ground_contact = true;
   int min_contact_columns = 5;      // mask columns with road right below their lowest pixel
   double min_contact_fraction = 0.5; // ... and this fraction of the mask's columns
+  double contact_depth_quantile = 0.5;  // of the columns' contact depths: the car's depth
   // a vehicle instance with fewer stereo points than this (but at least depth_fill_min_points,
   // their median within depth_fill_max_depth_m) starts with its keypoints without stereo too,
   // each at the depth of its nearest stereo keypoint (tracking/stereo_depth_fill.hpp; 0: off)
@@ -130,6 +131,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("instance_border_px", o.instance_border_px, 0.0, 50.0);
   visit("min_contact_columns", o.min_contact_columns, 1, 100000);
   visit("min_contact_fraction", o.min_contact_fraction, 0.0, 1.0);
+  visit("contact_depth_quantile", o.contact_depth_quantile, 0.0, 1.0);
   visit("depth_fill_below_points", o.depth_fill_below_points, 0, 100000);
   visit("depth_fill_min_points", o.depth_fill_min_points, 1, 100000);
   visit("depth_fill_max_depth_m", o.depth_fill_max_depth_m, 0.5, 10000.0);

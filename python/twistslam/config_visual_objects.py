@@ -105,6 +105,9 @@ class VisualObjectsConfig:
         "cars at 42-51 m with sidewalk below 10 of 14 and 7 of 9 columns, seeded by 0.3 into "
         "tracks drifting 3-9 m off)", "fraction",
         lo=0.0, hi=1.0)
+    contact_depth_quantile: float = param(
+        0.5, "the quantile of the contact columns' depths that places the car", "fraction",
+        lo=0.0, hi=1.0)
     depth_fill_below_points: int = param(
         12, "a vehicle instance with fewer stereo points (and no ground contact) starts its "
         "cluster with its keypoints without stereo as well, each at the depth of its nearest "
