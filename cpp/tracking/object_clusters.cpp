@@ -130,6 +130,8 @@ bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points
     const auto mono = ground_contact_points(frame, instance);
     // the stereo points keep their depth: they place the car where they can
     fresh.insert(fresh.end(), mono.begin(), mono.end());
+    // the contact gives the depth the points lack: fewer of them carry the planar twist
+    if (!mono.empty()) min_points = std::min(min_points, options_.min_contact_cluster_points);
   }
   if (!lidar_seeded && ground_contact && fresh.size() == num_stereo &&
       static_cast<int>(num_stereo) < depth_fill_below_points_) {

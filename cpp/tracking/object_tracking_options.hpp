@@ -36,6 +36,7 @@ struct ObjectTrackingOptions {
   int min_contact_columns = 5;      // mask columns with road right below their lowest pixel
   double min_contact_fraction = 0.5; // ... and this fraction of the mask's columns
   double contact_depth_quantile = 0.5;  // of the columns' contact depths: the car's depth
+  int min_contact_cluster_points = 4;   // keypoints a cluster placed by its contact needs
   // a vehicle instance with fewer stereo points than this (but at least depth_fill_min_points,
   // their median within depth_fill_max_depth_m) starts with its keypoints without stereo too,
   // each at the depth of its nearest stereo keypoint (tracking/stereo_depth_fill.hpp; 0: off)
@@ -132,6 +133,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("min_contact_columns", o.min_contact_columns, 1, 100000);
   visit("min_contact_fraction", o.min_contact_fraction, 0.0, 1.0);
   visit("contact_depth_quantile", o.contact_depth_quantile, 0.0, 1.0);
+  visit("min_contact_cluster_points", o.min_contact_cluster_points, 3, 100000);
   visit("depth_fill_below_points", o.depth_fill_below_points, 0, 100000);
   visit("depth_fill_min_points", o.depth_fill_min_points, 1, 100000);
   visit("depth_fill_max_depth_m", o.depth_fill_max_depth_m, 0.5, 10000.0);

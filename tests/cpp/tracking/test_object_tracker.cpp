@@ -158,6 +158,47 @@ TEST_F(TrackerScene, CarTheRightCameraCannotSeeStartsAtItsGroundContactDepth) {
   EXPECT_NEAR(moved.z(), 0.4 * 5, 0.4);
 }
 
+TEST_F(TrackerScene, ACarPlacedByItsGroundContactStartsFromFewerKeypoints) {
+  // a far car's small mask, partly behind a nearer car, keeps 4 keypoints and none with a
+  // stereo depth: the contact gives their depth, and min_contact_cluster_points (not the
+  // planar minimum of stereo points) decides
+  Car few = make_car(rng, Vec3(1.0, 0.9, 16), Vec3(0, 0, 0.4), 0.0, 4);
+  for (Vec3& X : few.X_o) X.z() = -0.9;
+  few.X_o[0].y() = 0.7;  // one of them by a wheel: the mask's lower edge meets the road
+  const Vec4 road_plane(0, -1, 0, 1.65);
+  auto run = [&](int min_contact_points) {
+    tracking::ObjectTrackingOptions options;
+    options.min_contact_cluster_points = min_contact_points;
+    auto tracker = make_tracker(options);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    for (int i = 0; i < 4; ++i) {
+      SceneFrame f(i);
+      f.mono = true;
+      f.add_car(few, i, 5);
+      f.mono = false;
+      f.add_background(background);
+      cv::Mat labels(kCamera.height, kCamera.width, CV_32SC1, cv::Scalar(kRoad));
+      labels.setTo(kCar, f.instances > 0);
+      reports.push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
+                                      labels, road_plane));
+    }
+    return std::make_pair(std::move(tracker), reports);
+  };
+  ASSERT_GT(tracking::ObjectTrackingOptions().min_new_planar_cluster_points, 4);
+  auto [strict, none] = run(6);
+  EXPECT_TRUE(strict.tracks().empty());
+  auto [lenient, reports] = run(4);
+  ASSERT_EQ(lenient.tracks().size(), 1u);
+  EXPECT_EQ(reports[0].num_new, 1);
+  // too few points for the twist's min_inliers: each frame re-seeds it at its contact
+  const objects::ObjectTrack& track = lenient.tracks()[0];
+  ASSERT_EQ(track.frames.size(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_TRUE(track.frames[i].reported) << "frame " << i;
+    EXPECT_NEAR(track.frames[i].T_w_o(2, 3), few.c0.z() - 0.9 + 0.4 * i, 0.8) << "frame " << i;
+  }
+}
+
 TEST_F(TrackerScene, FrameWithoutMasksKeepsTheTrack) {
   const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.5, 0, 0), 0.02);
   auto tracker = make_tracker();
