@@ -11,7 +11,7 @@ GroundContact ground_contact_depth(const cv::Mat& instances, const cv::Mat& labe
                                    const geometry::StereoCamera& camera, const Mat4& T_w_c,
                                    const Vec4& plane_w, int min_columns, double min_fraction,
                                    double max_depth_m, int max_gap_px,
-                                   double depth_quantile) {
+                                   double depth_quantile, double contact_height_m) {
   GroundContact out;
   if (instances.empty() || labels.empty() || instances.type() != CV_32SC1 ||
       labels.type() != CV_32SC1 || instances.size() != labels.size() || instance <= 0 ||
@@ -30,7 +30,9 @@ GroundContact ground_contact_depth(const cv::Mat& instances, const cv::Mat& labe
   const Mat3 R_w_c = T_w_c.topLeftCorner<3, 3>();
   const Vec3 t_w_c = T_w_c.topRightCorner<3, 1>();
   const Vec3 n_c = R_w_c.transpose() * plane_w.head<3>();
-  const double d_c = plane_w.head<3>().dot(t_w_c) + plane_w(3);
+  double d_c = plane_w.head<3>().dot(t_w_c) + plane_w(3);
+  // raised towards the camera (at the origin, on the plane's d_c side)
+  d_c -= std::copysign(contact_height_m * n_c.norm(), d_c);
   std::vector<double> depths;
   for (int u = 0; u < cols; ++u) {
     if (bottom[u] < 0) continue;

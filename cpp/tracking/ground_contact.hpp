@@ -25,6 +25,8 @@ struct GroundContact {
   int hidden_columns = 0;  // columns whose lower edge rests on another instance (an occluder)
 };
 
+// contact_height_m: the rays meet a plane this far above the road (towards the camera): a
+// car's lowest pixel between its wheels is its body, above the road.
 // instances, labels: CV_32SC1 of the camera's image size (instance ids, class ids); plane_w:
 // the road (n, d) with n . X_w + d = 0, T_w_c the camera pose. Road below means within
 // `max_gap_px` rows under the mask's lowest pixel of that column (mask edges are not exact).
@@ -40,6 +42,6 @@ GroundContact ground_contact_depth(const cv::Mat& instances, const cv::Mat& labe
                                    const geometry::StereoCamera& camera, const Mat4& T_w_c,
                                    const Vec4& plane_w, int min_columns, double min_fraction,
                                    double max_depth_m, int max_gap_px = 2,
-                                   double depth_quantile = 0.5);
+                                   double depth_quantile = 0.5, double contact_height_m = 0.0);
 
 }  // namespace twistslam::tracking

@@ -56,7 +56,7 @@ std::vector<std::pair<int, Vec3>> ObjectTracker::ground_contact_points(const Fra
       ground_contact_depth(instances_, labels_, instance, options_.road_class_id, camera_, T_w_c,
                            road_plane_w_, options_.min_contact_columns,
                            options_.min_contact_fraction, options_.max_depth_m, 2,
-                           options_.contact_depth_quantile);
+                           options_.contact_depth_quantile, options_.contact_height_m);
   if (!contact.valid) return out;
   const map::StereoKeypoints& k = frame.keypoints;
   for (int i : free_mono_keypoints(frame, instance))

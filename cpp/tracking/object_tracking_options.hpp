@@ -37,6 +37,7 @@ struct ObjectTrackingOptions {
   double min_contact_fraction = 0.5; // ... and this fraction of the mask's columns
   double contact_depth_quantile = 0.5;  // of the columns' contact depths: the car's depth
   int min_contact_cluster_points = 4;   // keypoints a cluster placed by its contact needs
+  double contact_height_m = 0.0;        // the contact rays meet the plane this far above the road
   // a vehicle instance with fewer stereo points than this (but at least depth_fill_min_points,
   // their median within depth_fill_max_depth_m) starts with its keypoints without stereo too,
   // each at the depth of its nearest stereo keypoint (tracking/stereo_depth_fill.hpp; 0: off)
@@ -134,6 +135,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("min_contact_fraction", o.min_contact_fraction, 0.0, 1.0);
   visit("contact_depth_quantile", o.contact_depth_quantile, 0.0, 1.0);
   visit("min_contact_cluster_points", o.min_contact_cluster_points, 3, 100000);
+  visit("contact_height_m", o.contact_height_m, 0.0, 2.0);
   visit("depth_fill_below_points", o.depth_fill_below_points, 0, 100000);
   visit("depth_fill_min_points", o.depth_fill_min_points, 1, 100000);
   visit("depth_fill_max_depth_m", o.depth_fill_max_depth_m, 0.5, 10000.0);

@@ -146,3 +146,22 @@ TEST(GroundContact, BadInputGivesNoDepth) {
 }
 
 }  // namespace
+
+TEST(GroundContact, ContactHeightMeetsTheRaysAboveTheRoad) {
+  // between its wheels a car's lowest pixel is its body, 0.2 m above the road: on the road
+  // plane that ray lands 1.65 / 1.45 times too far; raised by 0.2 m it meets the body's depth
+  const geometry::StereoCamera cam = test_scenes::kitti_camera();
+  const double depth = 30.0, clearance = 0.2;
+  Images im = car_on_road(cam, depth * 1.65 / (1.65 - clearance), 500, 600);
+  for (const Vec4& plane : {kRoadPlane, Vec4(-kRoadPlane)}) {  // either orientation of (n, d)
+    const GroundContact on_road = ground_contact_depth(im.instances, im.labels, kInstance, kRoad,
+                                                       cam, Mat4::Identity(), plane, 5, 0.5, 60.0);
+    ASSERT_TRUE(on_road.valid);
+    EXPECT_NEAR(on_road.depth, depth * 1.65 / (1.65 - clearance), 0.6);
+    const GroundContact raised = ground_contact_depth(im.instances, im.labels, kInstance, kRoad, cam,
+                                                      Mat4::Identity(), plane, 5, 0.5, 60.0, 2,
+                                                      0.5, clearance);
+    ASSERT_TRUE(raised.valid);
+    EXPECT_NEAR(raised.depth, depth, 0.5);
+  }
+}
