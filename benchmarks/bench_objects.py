@@ -12,6 +12,9 @@ on the simulator's sequence, ``.cache/sim/SCENARIO-seedS-nF``, generated when mi
   must lower RPE_r);
 * ``no-const``: ``visual_objects.use_const = False`` (no e_const in the BA);
 * ``dis``: OpenCV DIS flow instead of the flow files;
+* ``stereo``: ``lidar.use_depth = False``, the camera alone without any LiDAR (the scan is
+  not read; every other row reads it: static keypoints take its depth, and a vehicle mask's
+  own returns check and complete its stereo points, docs/visual_objects.md);
 * ``online`` / ``det-reg-online``: ``visual_objects.final_smoothing = False``, the poses as
   the online tracking left them (no final smoothing of the whole tracks);
 * ``boxes-seg``: instance masks from the oracle detections instead of the panoptic files;
@@ -21,7 +24,7 @@ on the simulator's sequence, ``.cache/sim/SCENARIO-seedS-nF``, generated when mi
   (e_reg); ``classical``: the same with the core's classical LiDAR detector instead of the
   oracle (no precomputed files); ``classical-masks``: the same with the instance masks from
   those boxes too (no panoptic files: the system from raw stereo + LiDAR); every other row
-  runs with ``detector="none"`` (the camera alone);
+  runs with ``detector="none"`` (no 3D detections);
 * ``raft``: RAFT flow (``raft_small``) from the state-dict file ``--raft-weights FILE`` (or
   ``$TWISTSLAM_RAFT_WEIGHTS``) over the first ``--raft-frames`` frames only (default 10: RAFT
   is slow on a CPU), so its object metrics still count every car of the whole sequence and
@@ -102,6 +105,9 @@ ROWS = {r.name: r for r in [
     Row("free-link", {SECTION: {"planar_class_ids": []}}),
     Row("no-const", {SECTION: {"use_const": False}}),
     Row("dis", flow="dis"),
+    # the camera alone, strictly: no LiDAR at all (the other camera rows read the scan for
+    # static keypoints' depth and vehicle masks' returns, tracking/object_lidar_seed.cpp)
+    Row("stereo", {"lidar": {"use_depth": False}}),
     # the poses as tracked online: no final smoothing of the whole tracks
     Row("online", {SECTION: {"final_smoothing": False}}),
     Row("boxes-seg", segmentation="boxes"),
