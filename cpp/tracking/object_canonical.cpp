@@ -55,6 +55,14 @@ void ObjectTracker::check_heading_from_motion(int c) {
       travel.distance_m < lidar_options_.heading_from_motion_m ||
       travel.distance_m < lidar_options_.heading_motion_min_sigmas * travel.distance_sigma_m)
     return;
+  // a car drives along its length: box centres that travel across the frame's x axis are the
+  // boxes' own errors, not a drive (urban s11's car 22, stopped across the camera's road at
+  // 44-48 m: its first three oracle boxes 3 m short and facing backwards made a 3 m "travel"
+  // sideways, whose sign against the axis turned the frame around for good)
+  const Vec3 axis_w = track.last().T_w_o.block<3, 1>(0, 0);
+  const double max_angle_rad = lidar_options_.heading_motion_max_angle_deg * M_PI / 180.0;
+  if (std::abs(axis_w.dot(travel.velocity_w)) < std::cos(max_angle_rad) * travel.velocity_w.norm())
+    return;
   track.heading_from_motion = true;
   // a car drives forward: its box frame faced backwards (a LiDAR box's heading is known mod pi)
   if (track.last().T_w_o.block<3, 1>(0, 0).dot(travel.velocity_w) < 0) turn_canonical_around(c);

@@ -33,6 +33,7 @@ struct ObjectLidarOptions {
   bool canonical_pose = true;              // the first associated box sets the object frame
   double heading_from_motion_m = 1.5;      // travelled this far, a box frame facing backwards turns
   double heading_motion_min_sigmas = 5.0;  // ... and this many standard errors of the distance
+  double heading_motion_max_angle_deg = 45;  // ... along the frame's x axis (a car drives along it)
   bool heading_from_votes = true;          // until then, it faces the way most of its boxes do
   // a box without its own heading (mod pi) votes with the one a parked car has on its side of
   // the camera's lane: +1 right-hand traffic (a car on the right faces the camera's travel,
@@ -126,6 +127,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("canonical_pose", o.canonical_pose, 0, 1);
   visit("heading_from_motion_m", o.heading_from_motion_m, 0.0, 1e6);
   visit("heading_motion_min_sigmas", o.heading_motion_min_sigmas, 0.0, 1e6);
+  visit("heading_motion_max_angle_deg", o.heading_motion_max_angle_deg, 0.0, 90.0);
   visit("heading_from_votes", o.heading_from_votes, 0, 1);
   visit("road_side_heading", o.road_side_heading, -1, 1);
   visit("road_side_min_lateral_m", o.road_side_min_lateral_m, 0.0, 1000.0);

@@ -110,6 +110,13 @@ class LidarObjectsConfig:
         "scatter: a parked car passes 4 / 5 / 6 sigmas in 0.8 / 0.1 / 0.0 % of trials, one "
         "driving 0.5 m/frame in 98 / 95 / 91 % (the check repeats every frame: a rare pass "
         "still turns a track)", "sigmas", lo=0.0, hi=1e6)
+    heading_motion_max_angle_deg: float = param(
+        45.0, "... and within this angle of the frame's x axis, either way (a car drives along "
+        "its length; 45: more along it than across). Urban s11's car 22, stopped across the "
+        "camera's road at 44-48 m: its first three oracle boxes lay 3 m short and faced "
+        "backwards, the line through its boxes ran 3 m sideways, and the sign of that run "
+        "against the axis turned the frame around for good (yaw 180 deg). Measured in "
+        "docs/lidar_objects.md", "deg", lo=0.0, hi=90.0)
     heading_from_votes: bool = param(
         True, "until it has moved heading_from_motion_m, a canonical track faces the way most of "
         "its boxes' own headings do (one box, one vote; the classical detector's point-extent "

@@ -62,6 +62,9 @@ struct Boxes {
   // a second car's box this far from the car's (none: zero), with no returns in the scan (a
   // parked car hidden behind this one, its few returns too few to vote on a mask)
   Vec3 decoy_offset = Vec3::Zero();
+  // each box's centre is this much farther off than the previous one's (m per frame: boxes
+  // whose error grows or shrinks frame by frame, a car that is not moving that way)
+  Vec3 drift_per_frame = Vec3::Zero();
 };
 
 void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Background& background,
@@ -79,7 +82,8 @@ void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Back
       const Vec3 noise = boxes.centre_noise_m * Vec3(unit(rng), 0, unit(rng));
       dets.push_back(true_box(car, i, rng, boxes.extra_yaw + boxes.yaw_noise_rad * unit(rng) +
                                                (first ? boxes.first_yaw : 0),
-                              boxes.offset + noise + (first ? boxes.first_offset : Vec3::Zero()),
+                              boxes.offset + noise + static_cast<double>(i) * boxes.drift_per_frame +
+                                  (first ? boxes.first_offset : Vec3::Zero()),
                               boxes.class_id));
       if (boxes.far_end_shortfall_m > 0) {
         objects::Detection& d = dets.back();
@@ -260,6 +264,37 @@ TEST_F(DetectionFusion, AParkedCarFacesTheWayMostOfItsBoxesDo) {
   ASSERT_EQ(first_box.tracks().size(), 1u);
   const Vec3 x_axis = first_box.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
   EXPECT_LT(x_axis.dot(car.pose(7).block<3, 1>(0, 0)), -0.99);
+}
+
+TEST_F(DetectionFusion, BoxesRunningAcrossACarAreNoDrive) {
+  // a parked car whose first box faces backwards and whose boxes run 0.2 m/frame at 70 deg off
+  // its axis (backwards, mostly sideways): the line through them is no drive, the boxes' own
+  // headings decide. With any angle accepted, the run's backward part keeps the first box's
+  // frame, facing backwards, for good
+  const Car car = make_car(rng, Vec3(-3, 0.5, 16), Vec3::Zero(), 0.0);
+  const Vec3 axis = car.pose(0).block<3, 1>(0, 0);
+  const Vec3 side = kUp.cross(axis).normalized();
+  const double angle = 70.0 * M_PI / 180.0;
+  Boxes boxes;
+  boxes.first_yaw = M_PI;
+  boxes.drift_per_frame = 0.2 * (-std::cos(angle) * axis + std::sin(angle) * side);
+  for (const double max_angle_deg : {45.0, 90.0}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.heading_motion_max_angle_deg = max_angle_deg;
+    auto tracker = make_tracker({}, lidar);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    run_with_boxes(tracker, car, background, 12, boxes, rng, &reports);
+    ASSERT_EQ(tracker.tracks().size(), 1u) << max_angle_deg;
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    const double facing = track.last().T_w_o.block<3, 1>(0, 0).dot(car.pose(11).block<3, 1>(0, 0));
+    if (max_angle_deg < 90.0) {
+      EXPECT_FALSE(track.heading_from_motion);
+      EXPECT_GT(facing, 0.95);
+    } else {
+      EXPECT_TRUE(track.heading_from_motion);
+      EXPECT_LT(facing, -0.95);
+    }
+  }
 }
 
 TEST_F(DetectionFusion, PointExtentBoxesDoNotVoteOnTheHeading) {
