@@ -65,7 +65,7 @@ void ObjectTracker::check_heading_from_motion(int c) {
     return;
   track.heading_from_motion = true;
   // a car drives forward: its box frame faced backwards (a LiDAR box's heading is known mod pi)
-  if (track.last().T_w_o.block<3, 1>(0, 0).dot(travel.velocity_w) < 0) turn_canonical_around(c);
+  if (axis_w.dot(travel.velocity_w) < 0) turn_canonical_around(c);
 }
 
 void ObjectTracker::check_heading_from_votes(int c) {
