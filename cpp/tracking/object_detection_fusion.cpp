@@ -5,6 +5,7 @@
 // and the drift-free twist e_det of the object window (optim/visual_object_window.hpp).
 // Not in the paper: a box's LiDAR returns projected into the instance image say on which
 // object's mask it lies, and a cluster's first box must lie on the cluster's own.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -31,11 +32,25 @@ double distance_to_box(const geometry::Box3D& box, const Vec3& p_c) {
   return (p_b - p_b.cwiseMax(-half).cwiseMin(half)).norm();
 }
 
-// Whether any of the track's boxes measured its length (the others took the detector's prior).
-bool has_measured_box(const objects::ObjectTrack& track) {
+// How well a box knows the car's length axis: 2 a measured length (an L-shape, or a detector
+// that sees the whole car); 1 a prior length laid along a face seen across the line of sight
+// (a side); 0 a prior length laid away from a face seen end-on (a rear, or a partly hidden
+// side read as one: its axis is a guess). `prior_length`: Detection::open_end != 0.
+int axis_rank(bool prior_length, const Mat4& T_w_box, const Mat4& T_w_c, double min_angle_deg) {
+  if (!prior_length) return 2;
+  const Vec3 sight_w = T_w_box.topRightCorner<3, 1>() - T_w_c.topRightCorner<3, 1>();
+  const double cos_to_sight = std::abs(T_w_box.block<3, 1>(0, 0).dot(sight_w)) / sight_w.norm();
+  return cos_to_sight <= std::cos(min_angle_deg * M_PI / 180.0) ? 1 : 0;
+}
+
+// The best axis rank among the track's boxes (-1: no box).
+int track_axis_rank(const objects::ObjectTrack& track, double min_angle_deg) {
+  int best = -1;
   for (const objects::TrackFrame& row : track.frames)
-    if (row.has_detection() && row.open_end_w.isZero()) return true;
-  return false;
+    if (row.has_detection())
+      best = std::max(best, axis_rank(!row.open_end_w.isZero(), row.T_w_o_detected,
+                                      geometry::se3_inverse(row.T_c_w), min_angle_deg));
+  return best;
 }
 
 // Whether p (frame c) lies within margin of a box of the frame other than box d.
@@ -171,7 +186,10 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
     for (int r = static_cast<int>(track.frames.size()) - 2; r >= 0 && !reference; --r)
       if (track.frames[r].has_detection()) reference = &track.frames[r].T_w_o_detected;
     const bool across = reference && objects::quarter_turned(T_w_box, *reference);
-    if (across && det.open_end != 0) {
+    const double side_angle = lidar_options_.side_view_min_angle_deg;
+    const int rank = across ? axis_rank(det.open_end != 0, T_w_box, T_w_c, side_angle) : 2;
+    const bool outranks = across && track.canonical && rank > track_axis_rank(track, side_angle);
+    if (across && det.open_end != 0 && !outranks) {
       // a box whose length is the detector's prior, a quarter turn off the track's axis: a
       // partly hidden L-shape read as a car's rear (the detector's 90 deg flips are all such
       // boxes, docs/detection.md). The car is there, but neither its axis nor its centre is:
@@ -180,9 +198,11 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
       row.range = det.box.center.norm();
       return;
     }
-    if (across && track.canonical && !has_measured_box(track)) {
-      // a measured length a quarter turn off a frame that only prior-length boxes set: the
-      // measured box decides the axis; the earlier boxes were the quarter-turned ones
+    if (outranks) {
+      // a box that knows the axis better than all before it, a quarter turn off the frame they
+      // set (a measured length, or a side seen across the view against rear-read boxes: urban
+      // s11's car 22, half its side hidden): it decides the axis; the earlier boxes were the
+      // quarter-turned ones
       for (objects::TrackFrame& earlier : track.frames) earlier.detection_index = -1;
       make_canonical(c, T_w_box);
       track.canonical_frame = row.frame;

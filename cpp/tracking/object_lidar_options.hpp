@@ -35,6 +35,9 @@ struct ObjectLidarOptions {
   double heading_motion_min_sigmas = 5.0;  // ... and this many standard errors of the distance
   double heading_motion_max_angle_deg = 45;  // ... along the frame's x axis (a car drives along it)
   bool heading_from_votes = true;          // until then, it faces the way most of its boxes do
+  // a prior-length box whose length axis lies at least this far from the line of sight saw a
+  // side (its axis is the car's); nearer it, the axis was laid away from a face seen end-on
+  double side_view_min_angle_deg = 60;
   // a box without its own heading (mod pi) votes with the one a parked car has on its side of
   // the camera's lane: +1 right-hand traffic (a car on the right faces the camera's travel,
   // one on the left faces it), -1 left-hand traffic, 0 no vote
@@ -129,6 +132,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("heading_motion_min_sigmas", o.heading_motion_min_sigmas, 0.0, 1e6);
   visit("heading_motion_max_angle_deg", o.heading_motion_max_angle_deg, 0.0, 90.0);
   visit("heading_from_votes", o.heading_from_votes, 0, 1);
+  visit("side_view_min_angle_deg", o.side_view_min_angle_deg, 0.0, 90.0);
   visit("road_side_heading", o.road_side_heading, -1, 1);
   visit("road_side_min_lateral_m", o.road_side_min_lateral_m, 0.0, 1000.0);
   visit("road_side_max_lateral_m", o.road_side_max_lateral_m, 0.0, 1000.0);

@@ -117,6 +117,17 @@ class LidarObjectsConfig:
         "backwards, the line through its boxes ran 3 m sideways, and the sign of that run "
         "against the axis turned the frame around for good (yaw 180 deg). Measured in "
         "docs/lidar_objects.md", "deg", lo=0.0, hi=90.0)
+    side_view_min_angle_deg: float = param(
+        60.0, "a box whose length is the detector's prior (a partly seen car) knows its length "
+        "axis only if that axis lies at least this far from the camera's line of sight to it: "
+        "the seen face then ran along the car, a side. Nearer the line of sight the axis was "
+        "laid away from a face seen end-on, a rear, or a partly hidden side read as one. A "
+        "track whose frame only such boxes set takes the axis of the first box that saw a "
+        "side (a measured length outranks both). The classical detector lays a rear's length "
+        "within 45 deg of the line of sight; 60 leaves its heading scatter a margin. Urban "
+        "s11's car 22, stopped across the road 35-45 m ahead with half its side hidden: its "
+        "rear-read boxes lay 14-18 deg from the line of sight, its side boxes 70-75 deg", "deg",
+        lo=0.0, hi=90.0)
     heading_from_votes: bool = param(
         True, "until it has moved heading_from_motion_m, a canonical track faces the way most of "
         "its boxes' own headings do (one box, one vote; the classical detector's point-extent "

@@ -51,6 +51,9 @@ struct Boxes {
   // frames from quarter_from to quarter_to (excluded): the box is a quarter turn off, its
   // length the detector's prior (open_end set), as a partly hidden L-shape read as a rear
   int quarter_from = -1, quarter_to = -1;
+  // from this frame on, the other boxes have the prior's length too (open_end set) along the
+  // car's true axis: a side seen, partly hidden (-1: none)
+  int prior_length_from = -1;
   // > 0: each box is the extent of its points, as the classical detector's: its far end
   // (away from the camera) falls short by |N(0, this)| m, its near end stays;
   // point_extent says so to the tracker (Detection::point_extent)
@@ -97,6 +100,8 @@ void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Back
       }
       if (i >= boxes.quarter_from && i < boxes.quarter_to) {
         dets.back().box.yaw += M_PI / 2;
+        dets.back().open_end = 1;
+      } else if (boxes.prior_length_from >= 0 && i >= boxes.prior_length_from) {
         dets.back().open_end = 1;
       }
       if (!boxes.decoy_offset.isZero()) dets.push_back(true_box(car, i, rng, 0, boxes.decoy_offset));
@@ -473,6 +478,39 @@ TEST_F(DetectionFusion, AMeasuredBoxTurnsAFrameThatOnlyPriorLengthBoxesSet) {
   EXPECT_FALSE(track.frames.front().has_detection());
   expect_canonical(track, tracker.clusters()[0], car, 0.05);
   EXPECT_NEAR(track.size.x(), kLength, 0.1);
+}
+
+TEST_F(DetectionFusion, ASideSeenTurnsAFrameThatOnlyRearReadBoxesSet) {
+  // urban s11's car 22: a car across the line of sight, half its side hidden. The first boxes
+  // read the seen half side as a rear (prior length, a quarter turn off, along the line of
+  // sight); the later ones see the side (prior length too, along the car). The side outranks
+  // the rear reading: the frame follows the later boxes and the first ones are dropped. With
+  // the rule off (no box is a side at 90 deg), the frame stays a quarter turn off.
+  const Car car = make_car(rng, Vec3(-2, 0.5, 15), Vec3(0.3, 0, 0.05), 0.0);
+  Boxes boxes;
+  boxes.quarter_from = 0;
+  boxes.quarter_to = 4;
+  boxes.prior_length_from = 0;
+  for (const double min_angle_deg : {60.0, 90.0}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.side_view_min_angle_deg = min_angle_deg;
+    auto tracker = make_tracker({}, lidar);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    run_with_boxes(tracker, car, background, 12, boxes, rng, &reports);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    const objects::TrackFrame& last = track.last();
+    const Mat4 err = geometry::se3_inverse(car.pose(last.frame)) * last.T_w_o;
+    const double turn_deg = rotation_angle_deg(err.topLeftCorner<3, 3>());
+    if (min_angle_deg < 90.0) {
+      for (int f = 0; f < boxes.quarter_to; ++f)
+        EXPECT_FALSE(track.frames[f].has_detection()) << "frame " << f;
+      EXPECT_LT(turn_deg, 1.0);
+      EXPECT_LT((last.T_w_o.topRightCorner<3, 1>() - car.pose(last.frame).topRightCorner<3, 1>()).norm(), 0.1);
+    } else {
+      EXPECT_NEAR(turn_deg, 90.0, 2.0);
+    }
+  }
 }
 
 TEST_F(DetectionFusion, LaterBoxesReanchorAFirstBoxsError) {
