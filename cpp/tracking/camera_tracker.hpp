@@ -43,6 +43,11 @@ class CameraTracker {
   void reset();
 
  private:
+  // The last frame's matched, inlier map points (the motion model's search set).
+  std::vector<int> last_frame_points(const map::Map& map) const;
+  // Without a velocity: frame.T_c_w from descriptor matches to those points and PnP RANSAC
+  // (descriptor_pose.hpp); unchanged when too few inliers.
+  void predict_from_descriptors(Frame& frame, const map::Map& map) const;
   bool track_with_motion_model(Frame& frame, map::Map& map, double radius_scale);
   bool relocalize_in_local_map(Frame& frame, map::Map& map);
   int optimize_frame_pose(Frame& frame, const map::Map& map, bool drop_outliers);

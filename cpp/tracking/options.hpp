@@ -19,6 +19,8 @@ struct TrackingOptions {
   int min_init_points = 100;             // stereo points needed to start (or restart) a map
   double search_radius_px = 15;          // motion-model projection search (level-0 px)
   double local_map_search_radius_px = 4; // local-map projection search (level-0 px)
+  // the frame after a map start (no velocity): predicted by descriptor matches + PnP RANSAC
+  bool descriptor_prediction = true;
   int max_hamming = 40;                  // accepted descriptor distance (bits)
   double ratio_test = 0.7;               // best / second-best distance within a cell
   int pose_rounds = 4;                   // outlier-rejection rounds of the pose optimisation
@@ -100,6 +102,7 @@ void for_each_option(TrackingOptions& o, Visit&& visit) {
   // widens it up to 4x); the bound keeps the grid's cell arithmetic inside int
   visit("search_radius_px", o.search_radius_px, 0.0, 2000.0);
   visit("local_map_search_radius_px", o.local_map_search_radius_px, 0.0, 2000.0);
+  visit("descriptor_prediction", o.descriptor_prediction, 0, 1);
   visit("max_hamming", o.max_hamming, 0, 256);  // bits of a 256-bit descriptor
   visit("ratio_test", o.ratio_test, 0.0, 1.0);
   // rounds of a full pose solve: ORB-SLAM2 needs 4, 100 re-classify far past convergence
