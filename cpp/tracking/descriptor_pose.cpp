@@ -16,8 +16,8 @@ std::optional<DescriptorPose> pose_from_descriptors(const Frame& frame, const ma
   const map::StereoKeypoints& kp = frame.keypoints;
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
-  // brute force over all keypoints: once per map start, a few hundred points x a few thousand
-  // keypoints (a few ms); the ratio test over the whole image keeps repeated texture out
+  // brute force over all keypoints, as it runs once per map start only; the ratio test over
+  // the whole image keeps repeated texture out
   for (int pid : point_ids) {
     if (!map.has_point(pid)) continue;
     const map::MapPoint& point = map.point(pid);

@@ -145,15 +145,21 @@ struct DetectionFusion : ::testing::Test {
     return tracker;
   }
 
+  // The same with these LiDAR options.
+  tracking::ObjectTracker track_with_lidar(const Car& car, const Boxes& boxes,
+                                           const tracking::ObjectLidarOptions& lidar, int frames) {
+    auto tracker = make_tracker({}, lidar);
+    std::vector<tracking::ObjectTrackingReport> reports;
+    run_with_boxes(tracker, car, background, frames, boxes, rng, &reports);
+    return tracker;
+  }
+
   // The same with box_instance_min_returns set (0: the box-on-mask rule off).
   tracking::ObjectTracker track_with_min_returns(const Car& car, const Boxes& boxes, int min_returns,
                                                  int frames) {
     tracking::ObjectLidarOptions lidar;
     lidar.box_instance_min_returns = min_returns;
-    auto tracker = make_tracker({}, lidar);
-    std::vector<tracking::ObjectTrackingReport> reports;
-    run_with_boxes(tracker, car, background, frames, boxes, rng, &reports);
-    return tracker;
+    return track_with_lidar(car, boxes, lidar, frames);
   }
 };
 
@@ -494,9 +500,7 @@ TEST_F(DetectionFusion, ASideSeenTurnsAFrameThatOnlyRearReadBoxesSet) {
   for (const double min_angle_deg : {60.0, 90.0}) {
     tracking::ObjectLidarOptions lidar;
     lidar.side_view_min_angle_deg = min_angle_deg;
-    auto tracker = make_tracker({}, lidar);
-    std::vector<tracking::ObjectTrackingReport> reports;
-    run_with_boxes(tracker, car, background, 12, boxes, rng, &reports);
+    const tracking::ObjectTracker tracker = track_with_lidar(car, boxes, lidar, 12);
     ASSERT_EQ(tracker.tracks().size(), 1u);
     const objects::ObjectTrack& track = tracker.tracks()[0];
     const objects::TrackFrame& last = track.last();
@@ -632,9 +636,7 @@ TEST_F(DetectionFusion, ALaterBoxOnTheTracksOwnMaskIsItsCarBeyondTheGate) {
   for (const bool for_canonical : {true, false}) {
     tracking::ObjectLidarOptions lidar;
     lidar.own_mask_boxes_for_canonical = for_canonical;
-    auto tracker = make_tracker({}, lidar);
-    std::vector<tracking::ObjectTrackingReport> reports;
-    run_with_boxes(tracker, car, background, 8, boxes, rng, &reports);
+    const tracking::ObjectTracker tracker = track_with_lidar(car, boxes, lidar, 8);
     ASSERT_EQ(tracker.tracks().size(), 1u);
     const objects::ObjectTrack& track = tracker.tracks()[0];
     ASSERT_TRUE(track.canonical);
