@@ -58,6 +58,9 @@ struct TrackFrame {
   // pose; empty otherwise
   Points3 see_through_returns;
   Vec3 see_through_centre_c = Vec3::Zero();  // the box centre (camera frame) then
+  // not reported because its track's points lie nearer than the LiDAR sees them
+  // (tracking/object_lidar_check.cpp); the verdict is taken again on the whole track at the end
+  bool lidar_contradicted = false;
   // LiDAR registration (eq. 6-7): the object's motion in w from the previous frame to this
   // one, T_w_o(this) = M_w_registered T_w_o(previous), measured by GICP of the object scans
   bool registered = false;
@@ -95,6 +98,11 @@ struct ObjectTrack {
   bool heading_from_motion = false;  // its front was checked against the direction it moved
   // its rows before canonical_frame (a cluster's guesses) were re-placed once by the boxes
   bool birth_placed = false;
+  // per row checked against the LiDAR (camera-only vehicle rows, tracking/object_lidar_check.cpp):
+  // the median over its points on its mask of the returns' depth around each over its own
+  // depth, and of their difference (m)
+  std::vector<double> lidar_depth_ratios;
+  std::vector<double> lidar_depth_offsets_m;
   // per row, the pose the online tracking gave it before the final smoothing replaced T_w_o
   // (empty: not smoothed)
   std::vector<Mat4> T_w_o_online;

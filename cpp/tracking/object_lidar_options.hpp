@@ -67,6 +67,16 @@ struct ObjectLidarOptions {
   int see_through_min_rays = 10;
   double see_through_ratio = 3.0;
   double see_through_shrink_m = 0.3;
+  // a camera-only vehicle track whose points lie nearer than the LiDAR returns around them (on
+  // its mask), by a median over its rows of more than lidar_check_max_ratio of their depth
+  // and lidar_check_min_offset_m, is not reported (0: off); rows with at least
+  // lidar_check_min_returns returns on the mask and lidar_check_min_points points compared
+  // count, and lidar_check_min_rows of them decide
+  double lidar_check_max_ratio = 0.04;
+  double lidar_check_min_offset_m = 1.5;
+  int lidar_check_min_rows = 5;
+  int lidar_check_min_returns = 5;
+  int lidar_check_min_points = 3;
   // point-extent boxes (Detection::point_extent) laid from their near end, the car's length
   // from this quantile of theirs (off: every box as an estimate, the median length)
   bool point_extent_lengths = false;
@@ -151,6 +161,11 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("see_through_min_rays", o.see_through_min_rays, 0, 1000000);
   visit("see_through_ratio", o.see_through_ratio, 0.0, 1e6);
   visit("see_through_shrink_m", o.see_through_shrink_m, 0.0, 10.0);
+  visit("lidar_check_max_ratio", o.lidar_check_max_ratio, 0.0, 10.0);
+  visit("lidar_check_min_offset_m", o.lidar_check_min_offset_m, 0.0, 1000.0);
+  visit("lidar_check_min_rows", o.lidar_check_min_rows, 1, 1000000);
+  visit("lidar_check_min_returns", o.lidar_check_min_returns, 1, 1000000);
+  visit("lidar_check_min_points", o.lidar_check_min_points, 1, 1000000);
   visit("point_extent_lengths", o.point_extent_lengths, 0, 1);
   visit("point_extent_length_quantile", o.point_extent_length_quantile, 0.0, 1.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);

@@ -198,6 +198,17 @@ class ObjectTracker : public ObjectBundleTerms {
   // A track of small_object_class_ids without a box this frame, farther than
   // small_object_report_max_depth_m, is not reported in it (object_report_range.cpp).
   void hide_far_small_tracks(const Frame& frame);
+  // A vehicle track without a canonical frame whose points lie nearer than the LiDAR returns
+  // around them, by a median over its rows of more than lidar_check_max_ratio and
+  // lidar_check_min_offset_m, is not reported in its rows without a box (object_lidar_check.cpp).
+  void hide_lidar_contradicted_tracks(const Frame& frame);
+  // The verdict on a track's medians so far (false before lidar_check_min_rows checked rows).
+  bool lidar_contradicts(const objects::ObjectTrack& track) const;
+  // Its reported rows without a box are not reported (lidar_contradicted).
+  static void hide_lidar_contradicted_rows(objects::ObjectTrack* track);
+  // At the end, on all its rows: the rows hidden online are reported again where the whole
+  // track's medians no longer contradict it. Called by smooth_tracks.
+  void retest_lidar_contradiction();
   // The frame's boxes no track took, kept for backfill_frames frames (object_backfill.cpp).
   void remember_unused_boxes(const Frame& frame);
   // A new canonical track c: the unused boxes of the frames before its first one that line up

@@ -247,6 +247,7 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
   ObjectSmoothingReport report;
   if (!options_.final_smoothing) {
     retest_see_through(T_c_w_of_frame);
+    retest_lidar_contradiction();
     return report;
   }
   for (int c = 0; c < static_cast<int>(tracks_.size()); ++c) {
@@ -302,6 +303,7 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
     report.num_residuals += s.num_residuals;
   }
   retest_see_through(T_c_w_of_frame);
+  retest_lidar_contradiction();
   return report;
 }
 

@@ -246,9 +246,10 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
     if viewer is not None:
         viewer.close()
     after_loop_ms = {}
-    if (perception.segmentation is not None and config.visual_objects.enabled
-            and config.visual_objects.final_smoothing and tracked):
-        # once, after the last frame, outside the per-frame loop (timed apart from it)
+    if perception.segmentation is not None and config.visual_objects.enabled and tracked:
+        # once, after the last frame, outside the per-frame loop (timed apart from it); without
+        # final_smoothing it only takes the output's LiDAR verdicts again on the final poses and
+        # whole tracks (see-through boxes, tracks nearer than the LiDAR sees them)
         start = time.perf_counter()
         slam.smooth_objects()
         after_loop_ms["object_smoothing"] = (time.perf_counter() - start) * 1e3

@@ -295,8 +295,11 @@ class Slam:
         all its rows and every observation of its points, e_const, e_link, e_head and the
         LiDAR terms in one problem, the cameras fixed at the refined trajectory. Afterwards
         :meth:`objects` gives the smoothed ``T_w_o`` and the online poses as
-        ``T_w_o_online``. Returns ``num_tracks`` (smoothed), ``num_rejected`` (kept online:
-        a smoothed step beyond ``max_step_m``) and ``num_residuals``."""
+        ``T_w_o_online``. Without ``final_smoothing`` only the output's LiDAR verdicts are
+        taken again (rows hidden online because the LiDAR saw through a box or a whole track's
+        points lay nearer than the LiDAR sees them). Returns ``num_tracks`` (smoothed),
+        ``num_rejected`` (kept online: a smoothed step beyond ``max_step_m``) and
+        ``num_residuals``."""
         if self._system is None:
             return {"num_tracks": 0, "num_rejected": 0, "num_residuals": 0}
         return dict(self._system.smooth_objects())

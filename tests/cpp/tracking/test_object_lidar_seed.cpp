@@ -3,6 +3,7 @@
 // synthetic scenes of tracker_scene.hpp (the camera at the world origin).
 #include <gtest/gtest.h>
 
+#include <map>
 #include <random>
 #include <vector>
 
@@ -116,6 +117,69 @@ TEST_F(LidarSeed, StereoDepthsOffTheLidarSurfaceJoinNoCluster) {
   run(tracker, 2, [](SceneFrame&) {});
   ASSERT_EQ(tracker.tracks().size(), 1u);
   EXPECT_NEAR(tracker.tracks()[0].frames[0].T_w_o(2, 3), 15.0, 1.0);
+}
+
+// A camera-only car whose stereo depths are all 10 % short (a disparity bias, as far cars'
+// corners on a nearer occluder's edge take): its points lie ~4 m before the returns on its
+// mask, so once lidar_check_min_rows rows agree its rows are not reported, the earlier ones
+// too (object_lidar_check.cpp); still tracked, and reported with unbiased stereo, with the
+// check off, or 10 % long (the test is one-sided: points may lie on the far part of the
+// visible surface).
+TEST_F(LidarSeed, RowsTheMasksReturnsContradictAreNotReported) {
+  car = make_car(rng, Vec3(-2, 0.5, 40), Vec3(0.3, 0, 0.1), 0.0);
+  auto reported = [](const objects::ObjectTrack& t) {
+    int n = 0;
+    for (const auto& r : t.frames) n += r.reported;
+    return n;
+  };
+  for (const double scale : {1.0, 0.9, 1.1})
+    for (const bool check : {true, false}) {
+      tracking::ObjectLidarOptions lidar;
+      if (!check) lidar.lidar_check_max_ratio = 0;
+      auto tracker = make_tracker({}, lidar);
+      run(tracker, 6, [scale](SceneFrame& f) { f.stereo_depth_scale = scale; });
+      ASSERT_EQ(tracker.tracks().size(), 1u) << scale << " " << check;
+      const objects::ObjectTrack& track = tracker.tracks()[0];
+      ASSERT_EQ(track.frames.size(), 6u);
+      EXPECT_GE(track.hits, 5) << "tracked either way";
+      const double depth = (track.last().T_c_w * track.last().T_w_o)(2, 3);
+      EXPECT_NEAR(depth, scale * 40.0, 0.04 * scale * 40.0) << "where the stereo placed it";
+      EXPECT_EQ(reported(track), scale < 1.0 && check ? 0 : 6) << scale << " " << check;
+    }
+}
+
+// The LiDAR sees the car 10 % farther than the stereo in its first 5 frames (a scan moved
+// along its rays), then where the stereo does. Online, the track's medians contradict it until
+// its unbiased rows are the majority (frame 10): rows 0-9 hidden, 10-14 reported. At the end
+// (smooth_tracks) the medians over all 15 rows decide: every row is reported again. A scan
+// 10 % farther in every frame keeps them all hidden.
+TEST_F(LidarSeed, TheWholeTracksMediansDecideAtTheEnd) {
+  car = make_car(rng, Vec3(-2, 0.5, 40), Vec3(0.3, 0, 0.1), 0.0);
+  for (const int biased_frames : {5, 15}) {
+    auto tracker = make_tracker();
+    std::map<int, Mat4> T_c_w_of_frame;
+    for (int i = 0; i < 15; ++i) {
+      SceneFrame f(i);
+      f.add_car(car, i, instance_id(i));
+      f.add_background(background);
+      const Points3 scan = (i < biased_frames ? 1.1 : 1.0) * box_surface_scan(car, i);
+      tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp, cv::Mat(),
+                    Vec4::Zero(), {}, &scan);
+      T_c_w_of_frame[i] = Mat4::Identity();
+    }
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    auto reported = [&] {
+      std::vector<int> out;
+      for (const auto& r : tracker.tracks()[0].frames) out.push_back(r.reported);
+      return out;
+    };
+    ASSERT_EQ(reported().size(), 15u);
+    const std::vector<int> online = reported();
+    for (int i = 0; i < 15; ++i)
+      EXPECT_EQ(online[i], biased_frames == 5 && i >= 10) << biased_frames << " biased, row " << i;
+    tracker.smooth_tracks(T_c_w_of_frame);
+    EXPECT_EQ(reported(), std::vector<int>(15, biased_frames == 5)) << biased_frames << " biased";
+  }
 }
 
 }  // namespace
