@@ -182,4 +182,40 @@ TEST_F(LidarSeed, TheWholeTracksMediansDecideAtTheEnd) {
   }
 }
 
+// The same 10 % short stereo, with a 3D box in the first frame (a frame that is not the box's:
+// canonical_pose off). A track with boxes is placed by them, not by its points' depth: its
+// rows are all reported.
+TEST_F(LidarSeed, ATrackWithBoxesIsNotJudgedByItsPointsDepth) {
+  car = make_car(rng, Vec3(-2, 0.5, 40), Vec3(0.3, 0, 0.1), 0.0);
+  tracking::ObjectLidarOptions lidar;
+  lidar.canonical_pose = false;
+  auto tracker = make_tracker({}, lidar);
+  for (int i = 0; i < 6; ++i) {
+    SceneFrame f(i);
+    f.stereo_depth_scale = 0.9;
+    f.add_car(car, i, instance_id(i));
+    f.add_background(background);
+    const Points3 scan = box_surface_scan(car, i);
+    std::vector<objects::Detection> boxes;
+    if (i == 0) {
+      const Mat4 P = car.pose(i);
+      objects::Detection d;
+      d.box.center = P.topRightCorner<3, 1>();
+      d.box.length = kLength, d.box.width = kWidth, d.box.height = kHeight;
+      d.box.yaw = std::atan2(-P(2, 0), P(0, 0));
+      d.score = 1.0;
+      d.class_id = kCar;
+      boxes.push_back(d);
+    }
+    tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp, cv::Mat(),
+                  Vec4::Zero(), boxes, &scan);
+  }
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const objects::ObjectTrack& track = tracker.tracks()[0];
+  ASSERT_FALSE(track.canonical);
+  ASSERT_TRUE(track.frames[0].has_detection());
+  ASSERT_GE(track.lidar_depth_ratios.size(), 5u) << "its rows without a box were checked";
+  for (const auto& r : track.frames) EXPECT_TRUE(r.reported) << "frame " << r.frame;
+}
+
 }  // namespace
