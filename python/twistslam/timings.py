@@ -24,7 +24,8 @@ class Timings:
         ``local_ba_wait``, the time tracking waited for it).
     after_loop_ms : name -> ms of the steps run once after the last frame, outside the
         per-frame loop and its ``hz`` (``object_smoothing``: the final smoothing of the object
-        tracks, ``visual_objects.final_smoothing``).
+        tracks, ``visual_objects.final_smoothing``; ``object_verdicts`` without it: the
+        end-of-run LiDAR verdicts on the object rows alone).
     """
 
     frame_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
