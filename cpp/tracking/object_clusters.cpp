@@ -113,6 +113,11 @@ bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points
                 fresh.end());
   }
   const size_t num_stereo = fresh.size();
+  // keypoints whose depth the scan gave (keypoint_lidar_depth) seed as the LiDAR completion does
+  size_t num_image_stereo = 0;
+  for (const auto& f : fresh)
+    num_image_stereo += f.first >= static_cast<int>(keypoint_lidar_filled_.size()) || !keypoint_lidar_filled_[f.first];
+  const bool filled_seed = static_cast<int>(num_image_stereo) < min_points && num_image_stereo < num_stereo;
   bool lidar_seeded = false;
   if (static_cast<int>(num_stereo) < min_points && ground_contact && lidar_options_.instance_lidar_depth) {
     // the LiDAR's depth where stereo failed, for vehicles (a person's mask lets returns of the
@@ -124,7 +129,7 @@ bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points
       lidar_seeded = true;
     }
   }
-  if (lidar_seeded_out) *lidar_seeded_out = lidar_seeded;
+  if (lidar_seeded_out) *lidar_seeded_out = lidar_seeded || filled_seed;
   if (!lidar_seeded && static_cast<int>(fresh.size()) < min_points && ground_contact && options_.ground_contact &&
       !labels_.empty() && road_plane_w_.head<3>().norm() > 0) {
     const auto mono = ground_contact_points(frame, instance);

@@ -29,6 +29,16 @@ struct ObjectLidarOptions {
   // and a stereo point of the instance farther than this fraction from their local depth joins
   // no cluster (0: off)
   double instance_lidar_max_depth_error = 0.2;
+  // vehicle keypoints' depth from the returns on their own mask (median within 8 px, or a
+  // local plane): 0 off, 1 those without stereo, 2 also stereo ones farther than
+  // instance_lidar_max_depth_error from it, 3 every one with returns near it; within
+  // keypoint_lidar_max_depth_m; with keypoint_lidar_agreement > 0 only where plane and median
+  // agree within that fraction. Off: measured, not yet a gain in every case (see the Python
+  // config and docs/visual_objects.md)
+  int keypoint_lidar_depth = 0;
+  double keypoint_lidar_max_depth_m = 80;
+  bool keypoint_lidar_plane = false;
+  double keypoint_lidar_agreement = 0;
   double detection_min_score = -1e9;       // detections below this are ignored
   bool canonical_pose = true;              // the first associated box sets the object frame
   double heading_from_motion_m = 1.5;      // travelled this far, a box frame facing backwards turns
@@ -136,6 +146,10 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("instance_lidar_depth", o.instance_lidar_depth, 0, 1);
   visit("instance_lidar_max_depth_m", o.instance_lidar_max_depth_m, 0.0, 10000.0);
   visit("instance_lidar_max_depth_error", o.instance_lidar_max_depth_error, 0.0, 10.0);
+  visit("keypoint_lidar_depth", o.keypoint_lidar_depth, 0, 3);
+  visit("keypoint_lidar_max_depth_m", o.keypoint_lidar_max_depth_m, 0.0, 10000.0);
+  visit("keypoint_lidar_plane", o.keypoint_lidar_plane, 0, 1);
+  visit("keypoint_lidar_agreement", o.keypoint_lidar_agreement, 0.0, 10.0);
   visit("detection_min_score", o.detection_min_score, -1e9, 1e9);
   visit("canonical_pose", o.canonical_pose, 0, 1);
   visit("heading_from_motion_m", o.heading_from_motion_m, 0.0, 1e6);

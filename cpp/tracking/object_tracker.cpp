@@ -290,7 +290,7 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
   return valid;
 }
 
-ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& instances,
+ObjectTrackingReport ObjectTracker::track(const Frame& input_frame, const cv::Mat& instances,
                                           const cv::Mat& flow, const Vec3& up_w,
                                           const cv::Mat& labels, const Vec4& road_plane_w,
                                           const std::vector<objects::Detection>& detections,
@@ -307,7 +307,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
                           labels.rows != camera_.height))
     throw std::invalid_argument("labels: expected int32 class ids of the image size");
 
-  T_c_w_of_frame_[frame.index] = frame.T_c_w;
+  T_c_w_of_frame_[input_frame.index] = input_frame.T_c_w;
   scan_ = scan && scan->rows() > 0 ? scan : nullptr;
   mask_lidar_depths_.clear();
   mask_lidar_points_.clear();
@@ -319,7 +319,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
   road_plane_w_ = road_plane_w;
   while (static_cast<int>(T_c_w_of_frame_.size()) > std::max(options_.window_frames, 2) + 1)
     T_c_w_of_frame_.erase(T_c_w_of_frame_.begin());
-  const size_t n = frame.keypoints.size();
+  const size_t n = input_frame.keypoints.size();
   instance_of_keypoint_.assign(n, 0);
   // with 3D boxes a box places its car: the border rule is the LiDAR fusion's own
   const bool boxed = lidar_options_.use_detections && !detections.empty();
@@ -328,21 +328,24 @@ ObjectTrackingReport ObjectTracker::track(const Frame& frame, const cv::Mat& ins
       boxed ? lidar_options_.depth_fill_below_points : options_.depth_fill_below_points;
   if (!instances.empty())
     for (size_t i = 0; i < n; ++i) {
-      const double scale = level_scale(i < frame.keypoints.octave.size() ? frame.keypoints.octave[i] : 0);
-      instance_of_keypoint_[i] = instance_at_keypoint(instances, frame.keypoints.uv[i],
+      const double scale = level_scale(i < input_frame.keypoints.octave.size() ? input_frame.keypoints.octave[i] : 0);
+      instance_of_keypoint_[i] = instance_at_keypoint(instances, input_frame.keypoints.uv[i],
                                                       border_px * scale);
     }
   claimed_by_.assign(n, -1);
   assigned_instances_.clear();
   std::map<int, objects::LabelVotes> votes;  // instance -> classes of its keypoints
   for (size_t i = 0; i < n; ++i)
-    if (instance_of_keypoint_[i] > 0) votes[instance_of_keypoint_[i]].add(frame.keypoints.label[i]);
+    if (instance_of_keypoint_[i] > 0) votes[instance_of_keypoint_[i]].add(input_frame.keypoints.label[i]);
   instance_class_.clear();
   for (const auto& [instance, v] : votes) instance_class_[instance] = v.best();
 
   // the road plane is re-estimated as the map grows: the planar links follow its normal
   for (objects::ObjectTrack& t : tracks_)
     if (t.alive() && t.link == geometry::LinkType::kPlanar) t.Pi = geometry::projector_planar(up_w);
+  // vehicle keypoints without a good stereo depth take their mask's LiDAR depth
+  Frame lidar_frame;
+  const Frame& frame = with_instance_lidar_depth(input_frame, &lidar_frame);
   // 1. search every live cluster from its prediction
   std::vector<int> live;
   std::vector<Mat4> predicted;

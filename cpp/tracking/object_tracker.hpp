@@ -18,6 +18,7 @@
 // later ones its size and the e_det terms of its window; a box keeps a cluster whose twist
 // failed on its pose.
 // The state is objects::ObjectTrack (one per cluster) + objects::ObjectCluster (its points).
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <opencv2/core/mat.hpp>
@@ -202,6 +203,10 @@ class ObjectTracker : public ObjectBundleTerms {
   // around them, by a median over its rows of more than lidar_check_max_ratio and
   // lidar_check_min_offset_m, is not reported in its rows without a box (object_lidar_check.cpp).
   void hide_lidar_contradicted_tracks(const Frame& frame);
+  // `frame`, or a copy in *storage whose vehicle keypoints took the depth of the returns on
+  // their own mask (lidar_objects.keypoint_lidar_depth; object_keypoint_lidar_depth.cpp)
+  const Frame& with_instance_lidar_depth(const Frame& frame, Frame* storage);
+  std::vector<std::uint8_t> keypoint_lidar_filled_;  // per keypoint of the frame: depth from the LiDAR
   // The verdict on a track's medians so far (false before lidar_check_min_rows checked rows).
   bool lidar_contradicts(const objects::ObjectTrack& track) const;
   // Its reported rows without a box are not reported (lidar_contradicted).

@@ -89,6 +89,26 @@ class LidarObjectsConfig:
         "match on a nearer car's edge; 0: off). Without it the LiDAR completion lost car 17 "
         "(its cluster sat on the occluder's edge: 70 of 74 cars); 0.1 kept it but made a ghost "
         "(2 instead of 1) and raised RPE_t to 0.0427", "fraction", lo=0.0, hi=10.0)
+    keypoint_lidar_depth: int = param(
+        0, "vehicle keypoints take the depth of the LiDAR returns on their own mask: 0 off, 1 "
+        "those without a stereo depth, 2 also stereo ones farther than "
+        "instance_lidar_max_depth_error from it, 3 every one with returns near it. Off by "
+        "default (measured 2026-12-02, docs/visual_objects.md): mode 2 within 30 m lowered the "
+        "camera-alone means on sixteen simulated sequences (RPE_t 0.0416 -> 0.0373-0.0388 m/m, "
+        "RPE_r 0.166 -> 0.150-0.153 deg/m) and tracked crowded s6's car 15, but either lost "
+        "urban s7's lead car (local plane) or, from the returns' median, raised real KITTI "
+        "0001's camera-alone object ATE 0.47 -> 0.75 m (masks from boxes take background "
+        "returns)", "mode", lo=0, hi=3)
+    keypoint_lidar_max_depth_m: float = param(
+        80.0, "... only where that depth is within this; 30 m (as instance_lidar_max_depth_m) "
+        "was measured: without a limit, heavily occluded far parked cars started 2-4 m off "
+        "(two ghosts, urban s4 and s5)", "m", lo=0.0, hi=10000.0)
+    keypoint_lidar_plane: bool = param(
+        False, "... the depth of a local plane through those returns (the camera's LiDAR depth, "
+        "nearest layer) instead of their median within 8 px")
+    keypoint_lidar_agreement: float = param(
+        0.0, "... only where the local plane's depth and the returns' median agree within this "
+        "fraction (0: no test)", "fraction", lo=0.0, hi=10.0)
     detection_min_score: float = param(
         -1e9, "detections below this score are ignored; the detector's own threshold decides "
         "by default (scores are not comparable across detectors)")

@@ -119,6 +119,71 @@ TEST_F(LidarSeed, StereoDepthsOffTheLidarSurfaceJoinNoCluster) {
   EXPECT_NEAR(tracker.tracks()[0].frames[0].T_w_o(2, 3), 15.0, 1.0);
 }
 
+// keypoint_lidar_depth (object_keypoint_lidar_depth.cpp): the car's keypoints take the
+// depth of the returns on their own mask (here those of its near face, as a LiDAR sees it).
+// Mode 1, with no stereo at all and the seed's own LiDAR completion off: those depths alone
+// start the cluster and keep it on the near face (14.1 m) for all 6 frames, reported from its
+// first tracked frame on; mode 0 starts none.
+// Mode 2 with every stereo depth 40 % short (matches on a nearer edge): they are replaced and
+// the cluster lies on the car, where mode 0 starts none (the check refuses them).
+TEST_F(LidarSeed, VehicleKeypointsTakeTheirMasksLidarDepth) {
+  auto near_face_scan = [&](int i) {
+    const Points3 all = box_surface_scan(car, i);
+    const double face_z = car.pose(i)(2, 3) - 0.9;
+    std::vector<Eigen::Index> rows;
+    for (Eigen::Index r = 0; r < all.rows(); ++r)
+      if (all(r, 2) < face_z + 0.05) rows.push_back(r);
+    Points3 out(static_cast<Eigen::Index>(rows.size()), 3);
+    for (size_t r = 0; r < rows.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = all.row(rows[r]);
+    return out;
+  };
+  auto run_with = [&](tracking::ObjectTracker& tracker, int frames, bool mono, double scale) {
+    for (int i = 0; i < frames; ++i) {
+      SceneFrame f(i);
+      f.mono = mono;
+      f.stereo_depth_scale = scale;
+      f.add_car(car, i, instance_id(i));
+      f.add_background(background);
+      const Points3 scan = near_face_scan(i);
+      tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp, cv::Mat(),
+                    Vec4::Zero(), {}, &scan);
+    }
+  };
+  for (const int mode : {0, 1}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.instance_lidar_depth = false;
+    lidar.keypoint_lidar_depth = mode;
+    auto tracker = make_tracker({}, lidar);
+    run_with(tracker, 6, true, 1.0);
+    if (mode == 0) {
+      EXPECT_TRUE(tracker.tracks().empty()) << "no depth cue: no cluster";
+      continue;
+    }
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    ASSERT_EQ(track.frames.size(), 6u);
+    EXPECT_GE(track.hits, 5);
+    for (const objects::TrackFrame& r : track.frames) {
+      EXPECT_NEAR(r.T_w_o(2, 3), car.pose(r.frame)(2, 3) - 0.9, 0.4) << "frame " << r.frame;
+      // a seed from the scan's depths is reported once tracked (as the seed's LiDAR completion)
+      EXPECT_EQ(r.reported, r.frame > 0) << "frame " << r.frame;
+    }
+  }
+  for (const int mode : {0, 2}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.mask_max_depth_ratio = 2.0;  // only the keypoints' own test acts (as above)
+    lidar.keypoint_lidar_depth = mode;
+    auto tracker = make_tracker({}, lidar);
+    run_with(tracker, 3, false, 0.6);
+    if (mode == 0) {
+      EXPECT_TRUE(tracker.tracks().empty()) << "the check refuses every stereo point";
+      continue;
+    }
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    EXPECT_NEAR(tracker.tracks()[0].frames[0].T_w_o(2, 3), 14.1, 0.4) << "on the near face";
+  }
+}
+
 // A camera-only car whose stereo depths are all 10 % short (a disparity bias, as far cars'
 // corners on a nearer occluder's edge take): its points lie ~4 m before the returns on its
 // mask, so once lidar_check_min_rows rows agree its rows are not reported, the earlier ones
