@@ -13,6 +13,7 @@
 #include "geometry/se3.hpp"
 #include "objects/assignment.hpp"
 #include "objects/association.hpp"
+#include "objects/box_axis_rank.hpp"
 #include "tracking/object_point_helpers.hpp"
 #include "tracking/object_tracker.hpp"
 
@@ -30,27 +31,6 @@ double distance_to_box(const geometry::Box3D& box, const Vec3& p_c) {
   const Vec3 p_b = T_c_b.topLeftCorner<3, 3>().transpose() * (p_c - T_c_b.topRightCorner<3, 1>());
   const Vec3 half(box.length / 2, box.height / 2, box.width / 2);  // box x, y (down), z
   return (p_b - p_b.cwiseMax(-half).cwiseMin(half)).norm();
-}
-
-// How well a box knows the car's length axis: 2 a measured length (an L-shape, or a detector
-// that sees the whole car); 1 a prior length laid along a face seen across the line of sight
-// (a side); 0 a prior length laid away from a face seen end-on (a rear, or a partly hidden
-// side read as one: its axis is a guess). `prior_length`: Detection::open_end != 0.
-int axis_rank(bool prior_length, const Mat4& T_w_box, const Mat4& T_w_c, double min_angle_deg) {
-  if (!prior_length) return 2;
-  const Vec3 sight_w = T_w_box.topRightCorner<3, 1>() - T_w_c.topRightCorner<3, 1>();
-  const double cos_to_sight = std::abs(T_w_box.block<3, 1>(0, 0).dot(sight_w)) / sight_w.norm();
-  return cos_to_sight <= std::cos(min_angle_deg * M_PI / 180.0) ? 1 : 0;
-}
-
-// The best axis rank among the track's boxes (-1: no box).
-int track_axis_rank(const objects::ObjectTrack& track, double min_angle_deg) {
-  int best = -1;
-  for (const objects::TrackFrame& row : track.frames)
-    if (row.has_detection())
-      best = std::max(best, axis_rank(!row.open_end_w.isZero(), row.T_w_o_detected,
-                                      geometry::se3_inverse(row.T_c_w), min_angle_deg));
-  return best;
 }
 
 // Whether p (frame c) lies within margin of a box of the frame other than box d.
@@ -187,8 +167,8 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
       if (track.frames[r].has_detection()) reference = &track.frames[r].T_w_o_detected;
     const bool across = reference && objects::quarter_turned(T_w_box, *reference);
     const double side_angle = lidar_options_.side_view_min_angle_deg;
-    const int rank = across ? axis_rank(det.open_end != 0, T_w_box, T_w_c, side_angle) : 2;
-    const bool outranks = across && track.canonical && rank > track_axis_rank(track, side_angle);
+    const int rank = across ? objects::axis_rank(det.open_end != 0, T_w_box, T_w_c, side_angle) : 2;
+    const bool outranks = across && track.canonical && rank > objects::track_axis_rank(track, side_angle);
     if (across && det.open_end != 0 && !outranks) {
       // a box whose length is the detector's prior, a quarter turn off the track's axis: a
       // partly hidden L-shape read as a car's rear (the detector's 90 deg flips are all such

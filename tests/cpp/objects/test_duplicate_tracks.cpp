@@ -66,3 +66,18 @@ TEST(DuplicateTracks, OfSeveralOwnersTheHighestRankedHoldsTheDuplicate) {
       {car_at(centre + along, 0.3, 20), car_at(centre - along, 0.3, 10), car_at(centre, 0.3, 30)}, 0.3);
   EXPECT_EQ(owner, (std::vector<int>{2, 2, -1}));
 }
+
+// A far car the classical detector read end-on in most frames (its prior length laid along the
+// line of sight: axis rank 0) and from the side in a few (rank 1) got a track per axis: the
+// one whose boxes know the axis better is the car, however many boxes the other has.
+TEST(DuplicateTracks, BoxesThatKnowTheAxisBetterOutrankMoreBoxes) {
+  const Vec3 centre(11, 1.5, 40);
+  TrackFootprint end_on = car_at(centre, M_PI / 2, 12);  // length along the line of sight
+  end_on.axis_rank = 0;
+  TrackFootprint side = car_at(centre + Vec3(0.3, 0, -1.0), 0.0, 4);  // across it
+  side.axis_rank = 1;
+  EXPECT_EQ(duplicate_owners({end_on, side}, 0.3), (std::vector<int>{1, -1}));
+  // equal ranks: the box count decides as before
+  side.axis_rank = 0;
+  EXPECT_EQ(duplicate_owners({end_on, side}, 0.3), (std::vector<int>{-1, 0}));
+}
