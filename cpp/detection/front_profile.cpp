@@ -27,14 +27,15 @@ int hidden_end_along_heading(const Detection& car, const ClusterShape& shape) {
 }
 }  // namespace
 
-int front_from_profile(const std::vector<ProfilePoint>& points, const DetectorOptions& o) {
-  if (static_cast<int>(points.size()) < kMinProfilePoints) return 0;
+double profile_gap_difference(const std::vector<ProfilePoint>& points, double upper_fraction) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (static_cast<int>(points.size()) < kMinProfilePoints) return nan;
   std::vector<float> heights;
   heights.reserve(points.size());
   for (const ProfilePoint& p : points) heights.push_back(p.up);
   const auto q = heights.begin() + static_cast<std::ptrdiff_t>(kTopQuantile * (heights.size() - 1));
   std::nth_element(heights.begin(), q, heights.end());
-  const double upper = o.front_profile_upper_fraction * *q;
+  const double upper = upper_fraction * *q;
   // the extents of all returns (the body, bumper to bumper) and of the upper ones
   float lo = std::numeric_limits<float>::infinity(), hi = -lo, upper_lo = lo, upper_hi = -lo;
   int num_upper = 0;
@@ -46,11 +47,31 @@ int front_from_profile(const std::vector<ProfilePoint>& points, const DetectorOp
     upper_lo = std::min(upper_lo, p.along);
     upper_hi = std::max(upper_hi, p.along);
   }
-  if (num_upper < kMinUpperPoints) return 0;
+  if (num_upper < kMinUpperPoints) return nan;
   // the hood (from the front bumper to the greenhouse) is longer than the trunk
-  const double gap_hi = hi - upper_hi, gap_lo = upper_lo - lo;
-  if (std::abs(gap_hi - gap_lo) < o.front_profile_min_gap_difference_m) return 0;
-  return gap_hi > gap_lo ? +1 : -1;
+  return (hi - upper_hi) - (upper_lo - lo);
+}
+
+int front_from_profile(const std::vector<ProfilePoint>& points, const DetectorOptions& o) {
+  const double difference = profile_gap_difference(points, o.front_profile_upper_fraction);
+  if (!(std::abs(difference) >= o.front_profile_min_gap_difference_m)) return 0;  // NaN too
+  return difference > 0 ? +1 : -1;
+}
+
+int front_from_views(const std::vector<double>& differences, int min_views, double min_sigmas,
+                     double min_difference_m) {
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  for (const double d : differences) {
+    if (!std::isfinite(d)) continue;
+    sum += d, sum2 += d * d, ++n;
+  }
+  if (n < std::max(min_views, 2)) return 0;
+  const double mean = sum / n;
+  const double variance = std::max(0.0, (sum2 - n * mean * mean) / (n - 1));
+  const double standard_error = std::sqrt(variance / n);
+  if (std::abs(mean) < min_difference_m || std::abs(mean) < min_sigmas * standard_error) return 0;
+  return mean > 0 ? +1 : -1;
 }
 
 void tell_front(Detection& car, const ClusterShape& shape, const std::vector<ProfilePoint>& profile,

@@ -22,6 +22,19 @@ struct ProfilePoint {
 // front_profile_min_gap_difference_m).
 int front_from_profile(const std::vector<ProfilePoint>& points, const DetectorOptions& options);
 
+// The hood-minus-trunk gap (m): the gap from the greenhouse to the +along end of the returns
+// minus the one to the -along end (> 0: the front lies towards +along), with the greenhouse the
+// returns above upper_fraction of the car's top. NaN with too few returns or upper returns.
+// One view's difference scatters by ~0.15 m (simulated side views at 16-29 m); a track
+// averages its views' (tracking/object_front_profile.cpp).
+double profile_gap_difference(const std::vector<ProfilePoint>& points, double upper_fraction);
+
+// The front from several views' gap differences (NaN ones skipped): +1 / -1 when at least
+// min_views are finite and their mean lies at least min_sigmas standard errors and
+// min_difference_m from 0 (on its side); else 0.
+int front_from_views(const std::vector<double>& differences, int min_views, double min_sigmas,
+                     double min_difference_m);
+
 // A car whose whole length was seen (length_seen) gets its front: heading_known is set and its
 // yaw turned by pi if the front lies at its box's -x end (the yaw stays in [-pi, pi)).
 // `profile`: its returns along its box's heading. A hidden end (shape.hidden_*_azimuth: what

@@ -98,6 +98,9 @@ struct ObjectTrack {
   bool heading_from_motion = false;  // its front was checked against the direction it moved
   // its rows before canonical_frame (a cluster's guesses) were re-placed once by the boxes
   bool birth_placed = false;
+  // per object scan spanning its length (canonical vehicles, tracking/object_front_profile.cpp):
+  // the hood-minus-trunk gap along the object frame's x axis (m; > 0: the front lies at +x)
+  std::vector<double> front_profile_m;
   // per row checked against the LiDAR (camera-only vehicle rows, tracking/object_lidar_check.cpp):
   // the median over its points on its mask of the returns' depth around each over its own
   // depth, and of their difference (m)

@@ -45,6 +45,15 @@ struct ObjectLidarOptions {
   double heading_motion_min_sigmas = 5.0;  // ... and this many standard errors of the distance
   double heading_motion_max_angle_deg = 45;  // ... along the frame's x axis (a car drives along it)
   bool heading_from_votes = true;          // until then, it faces the way most of its boxes do
+  // ... and its own returns' height profile votes too (the hood-minus-trunk gap,
+  // detection/front_profile.hpp): its views that span at least front_profile_min_span of its
+  // length, once their mean is at least front_profile_min_sigmas standard errors and
+  // front_profile_min_difference_m from 0 with front_profile_min_views views, one vote each
+  bool heading_from_profile = true;
+  int front_profile_min_views = 5;
+  double front_profile_min_span = 0.9;
+  double front_profile_min_sigmas = 3.0;
+  double front_profile_min_difference_m = 0.1;
   // a prior-length box whose length axis lies at least this far from the line of sight saw a
   // side (its axis is the car's); nearer it, the axis was laid away from a face seen end-on
   double side_view_min_angle_deg = 60;
@@ -156,6 +165,11 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("heading_motion_min_sigmas", o.heading_motion_min_sigmas, 0.0, 1e6);
   visit("heading_motion_max_angle_deg", o.heading_motion_max_angle_deg, 0.0, 90.0);
   visit("heading_from_votes", o.heading_from_votes, 0, 1);
+  visit("heading_from_profile", o.heading_from_profile, 0, 1);
+  visit("front_profile_min_views", o.front_profile_min_views, 2, 100000);
+  visit("front_profile_min_span", o.front_profile_min_span, 0.0, 1.0);
+  visit("front_profile_min_sigmas", o.front_profile_min_sigmas, 0.0, 100.0);
+  visit("front_profile_min_difference_m", o.front_profile_min_difference_m, 0.0, 10.0);
   visit("side_view_min_angle_deg", o.side_view_min_angle_deg, 0.0, 90.0);
   visit("road_side_heading", o.road_side_heading, -1, 1);
   visit("road_side_min_lateral_m", o.road_side_min_lateral_m, 0.0, 1000.0);

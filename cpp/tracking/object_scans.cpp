@@ -55,13 +55,17 @@ Points3 points_in_box(const Points3& scan_c, const Mat4& T_c_o, const Mat4& T_x_
 
 void ObjectTracker::register_scan(int c, const Frame& frame) {
   objects::ObjectTrack& track = tracks_[c];
-  if (!scan_ || !lidar_options_.use_registration || !track.canonical || !(track.size.minCoeff() > 0))
+  const bool profile = lidar_options_.heading_from_profile && track.link == geometry::LinkType::kPlanar;
+  if (!scan_ || !(lidar_options_.use_registration || profile) || !track.canonical ||
+      !(track.size.minCoeff() > 0))
     return;
   objects::TrackFrame& row = track.last();
   const Mat4 T_w_c = geometry::se3_inverse(frame.T_c_w);
   const Points3 points = detail::points_in_box(*scan_, frame.T_c_w * row.T_w_o, T_w_c, track.size,
                                        lidar_options_.scan_margin_m,
                                        lidar_options_.scan_ground_clearance_m);
+  if (profile) add_front_profile_view(c, points);
+  if (!lidar_options_.use_registration) return;
   const auto previous = last_scan_.find(track.id);
   if (points.rows() < std::max(lidar_options_.min_scan_points, kScanNeighbors)) {
     if (previous != last_scan_.end()) last_scan_.erase(previous);

@@ -168,6 +168,11 @@ class ObjectTracker : public ObjectBundleTerms {
   // most of its boxes' headings do (one box, one vote; a box known mod pi votes with its road
   // side's heading, road_side_heading).
   void check_heading_from_votes(int c);
+  // One view of a canonical vehicle's front: the hood-minus-trunk gap of its object scan
+  // (points_w, world frame) when the scan spans its length (object_front_profile.cpp).
+  void add_front_profile_view(int c, const Points3& points_w);
+  // +1 / -1: its views put its front at +x / -x of its frame; 0: undecided or off.
+  int front_from_profile_views(const objects::ObjectTrack& track) const;
   // Turns cluster c's canonical frame by pi about its y axis, with the boxes aligned to it.
   void turn_canonical_around(int c);
   // the canonical frame moved to the weighted mean offset of all the track's boxes

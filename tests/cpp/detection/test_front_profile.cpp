@@ -142,3 +142,31 @@ TEST(FrontProfile, OffOrFlatTheYawStaysModPi) {
   EXPECT_TRUE(flat.detections[0].length_seen);
   EXPECT_FALSE(flat.detections[0].heading_known);
 }
+
+// The signed gap difference behind front_from_profile: hood minus trunk, NaN when a profile is
+// too sparse to tell (a track averages its views' differences, front_from_views).
+TEST(FrontProfile, TheGapDifferenceIsHoodMinusTrunkOrNaN) {
+  // the returns lie 0.05 m apart: each end of the greenhouse is placed to within a step
+  EXPECT_NEAR(profile_gap_difference(profile(1.5, 0.6, 20), 0.8), 0.9, 0.1);
+  EXPECT_NEAR(profile_gap_difference(profile(0.6, 1.5, 20), 0.8), -0.9, 0.1);
+  EXPECT_NEAR(profile_gap_difference(profile(1.0, 0.8, 20), 0.8), 0.2, 0.1);  // below 0.4 m
+  EXPECT_EQ(front_from_profile(profile(1.0, 0.8, 20), DetectorOptions()), 0);
+  EXPECT_TRUE(std::isnan(profile_gap_difference(profile(1.5, 0.6, 2), 0.8)));  // 27 returns
+}
+
+// Several views: a clear mean decides where no single view would; too few views, a mean
+// within the scatter or below the floor, and NaN views do not count.
+TEST(FrontProfile, ViewsDecideByTheirMeanAgainstItsStandardError) {
+  const std::vector<double> car21 = {0.28, 0.47, 0.28, 0.03, 0.29, 0.09, 0.27};  // urban s13
+  EXPECT_EQ(front_from_views(car21, 5, 3.0, 0.1), +1);
+  std::vector<double> turned;
+  for (const double d : car21) turned.push_back(-d);
+  EXPECT_EQ(front_from_views(turned, 5, 3.0, 0.1), -1);
+  EXPECT_EQ(front_from_views(car21, 8, 3.0, 0.1), 0);                        // 7 views only
+  EXPECT_EQ(front_from_views(car21, 5, 3.0, 0.3), 0);                        // mean 0.24 m
+  EXPECT_EQ(front_from_views({0.4, -0.3, 0.35, -0.25, 0.3, -0.2}, 5, 3.0, 0.0), 0);  // scatter
+  std::vector<double> with_nan = {NAN, NAN, 0.28, 0.47, 0.28, 0.29};
+  EXPECT_EQ(front_from_views(with_nan, 5, 3.0, 0.1), 0);  // 4 finite views
+  with_nan.push_back(0.27);
+  EXPECT_EQ(front_from_views(with_nan, 5, 3.0, 0.1), +1);
+}

@@ -42,6 +42,9 @@ struct Boxes {
   int keypoint_frames = 1000;  // the car's keypoints in frames before this one only
   int keypoints_from = 0;      // ... and from this one on
   bool lidar = false;          // the frame's scan of the car goes to the tracker
+  // with lidar: the scan is a sedan's (sedan_scan) whose hood is this much longer than its
+  // trunk (0: the flat-topped box of car_scan)
+  double sedan_hood_minus_trunk_m = 0;
   double centre_noise_m = 0;   // per-frame box noise: centre (each axis of the road plane)
   double yaw_noise_rad = 0;    // ... and heading
   Vec3 first_offset = Vec3::Zero();  // the first box's own error (on top of the noise)
@@ -69,6 +72,43 @@ struct Boxes {
   // whose error grows or shrinks frame by frame, a car that is not moving that way)
   Vec3 drift_per_frame = Vec3::Zero();
 };
+
+// A LiDAR scan (frame c) of the car as a sedan, its front at +x: a body 0.2-0.95 m above the
+// road over the whole length (sides, ends and lids), and a 2 m greenhouse up to the box's top
+// (1.5 m) whose centre lies hood_minus_trunk_m / 2 behind the middle (the hood's gap to it that
+// much longer than the trunk's); 800 points drawn anew each frame, 1 cm noise.
+Points3 sedan_scan(const Car& car, int i, double hood_minus_trunk_m, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  const double bottom_y = kHeight / 2;  // y down: up = bottom_y - y
+  const double greenhouse_centre = -hood_minus_trunk_m / 2, greenhouse_half = 1.0;
+  std::vector<Vec3> pts;
+  for (int k = 0; k < 800; ++k) {
+    const double a = u(rng), b = u(rng);
+    Vec3 q;
+    switch (k % 5) {
+      case 0:  // a side of the body
+        q = Vec3(-kLength / 2 + kLength * a, bottom_y - (0.2 + 0.75 * b), (k % 2 ? 1 : -1) * kWidth / 2);
+        break;
+      case 1:  // an end of the body
+        q = Vec3((k % 2 ? 1 : -1) * kLength / 2, bottom_y - (0.2 + 0.75 * b), kWidth * (a - 0.5));
+        break;
+      case 2:  // the lids (hood, trunk) at the body's top
+        q = Vec3(-kLength / 2 + kLength * a, bottom_y - 0.95, kWidth * (b - 0.5));
+        break;
+      case 3:  // a side of the greenhouse
+        q = Vec3(greenhouse_centre + greenhouse_half * (2 * a - 1), bottom_y - (0.95 + 0.55 * b),
+                 (k % 2 ? 1 : -1) * 0.4 * kWidth);
+        break;
+      default:  // its roof
+        q = Vec3(greenhouse_centre + greenhouse_half * (2 * a - 1), bottom_y - kHeight, 0.8 * kWidth * (b - 0.5));
+    }
+    pts.push_back(on_car(car, i, q) + Vec3(noise(rng), noise(rng), noise(rng)));
+  }
+  Points3 out(static_cast<Eigen::Index>(pts.size()), 3);
+  for (size_t k = 0; k < pts.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = pts[k].transpose();
+  return out;
+}
 
 void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Background& background,
                     int frames, const Boxes& boxes, std::mt19937& rng,
@@ -106,7 +146,9 @@ void run_with_boxes(tracking::ObjectTracker& tracker, const Car& car, const Back
       }
       if (!boxes.decoy_offset.isZero()) dets.push_back(true_box(car, i, rng, 0, boxes.decoy_offset));
     }
-    const Points3 scan = boxes.lidar ? car_scan(car, i, rng) : Points3();
+    const Points3 scan = !boxes.lidar ? Points3()
+                         : boxes.sedan_hood_minus_trunk_m > 0 ? sedan_scan(car, i, boxes.sedan_hood_minus_trunk_m, rng)
+                                                              : car_scan(car, i, rng);
     reports->push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
                                      cv::Mat(), Vec4::Zero(), dets, boxes.lidar ? &scan : nullptr));
   }
@@ -344,6 +386,37 @@ TEST_F(DetectionFusion, APointExtentCarWhoseFrontWasToldFacesIt) {
       EXPECT_GT(facing, 0.99);
     } else {
       EXPECT_LT(facing, -0.99);
+    }
+  }
+}
+
+TEST_F(DetectionFusion, AStoppedCarNoBoxToldTheFrontOfFacesItsOwnProfile) {
+  // classical urban s13's car 21: stopped across the camera's travel (no road-side vote), every
+  // box knowing the heading mod pi only and facing backwards, none of them told the front. Its
+  // returns' height profile (hood 0.25 m longer than trunk: below the detector's 0.4 m per
+  // view) turns the frame to its front over its views; without the rule the first box's frame
+  // stays
+  const Car car = make_car(rng, Vec3(-3, 0.5, 16), Vec3::Zero(), 0.0);
+  Boxes boxes;
+  boxes.extra_yaw = M_PI;
+  boxes.far_end_shortfall_m = 0.01;
+  boxes.point_extent = true;
+  boxes.lidar = true;
+  boxes.sedan_hood_minus_trunk_m = 0.25;
+  for (const bool profile : {true, false}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.heading_from_profile = profile;
+    const tracking::ObjectTracker tracker = track_with_lidar(car, boxes, lidar, 12);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    EXPECT_FALSE(track.heading_from_motion);
+    const double facing = track.last().T_w_o.block<3, 1>(0, 0).dot(car.pose(11).block<3, 1>(0, 0));
+    if (profile) {
+      EXPECT_GT(facing, 0.99);
+      EXPECT_GE(track.front_profile_m.size(), 5u);
+    } else {
+      EXPECT_LT(facing, -0.99);
+      EXPECT_TRUE(track.front_profile_m.empty());
     }
   }
 }
