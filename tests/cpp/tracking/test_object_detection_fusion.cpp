@@ -175,6 +175,12 @@ void expect_canonical(const objects::ObjectTrack& track, const objects::ObjectCl
   EXPECT_GE(compared, 40);
 }
 
+// How a track's frame faces the car at its last frame: the cosine between their x axes (1:
+// the car's heading, -1: turned around).
+double facing(const objects::ObjectTrack& track, const Car& car) {
+  return track.last().T_w_o.block<3, 1>(0, 0).dot(car.pose(track.last().frame).block<3, 1>(0, 0));
+}
+
 struct DetectionFusion : ::testing::Test {
   std::mt19937 rng{4321};
   Background background = make_background(rng);
@@ -339,13 +345,12 @@ TEST_F(DetectionFusion, BoxesRunningAcrossACarAreNoDrive) {
     run_with_boxes(tracker, car, background, 12, boxes, rng, &reports);
     ASSERT_EQ(tracker.tracks().size(), 1u) << max_angle_deg;
     const objects::ObjectTrack& track = tracker.tracks()[0];
-    const double facing = track.last().T_w_o.block<3, 1>(0, 0).dot(car.pose(11).block<3, 1>(0, 0));
     if (max_angle_deg < 90.0) {
       EXPECT_FALSE(track.heading_from_motion);
-      EXPECT_GT(facing, 0.95);
+      EXPECT_GT(facing(track, car), 0.95);
     } else {
       EXPECT_TRUE(track.heading_from_motion);
-      EXPECT_LT(facing, -0.95);
+      EXPECT_LT(facing(track, car), -0.95);
     }
   }
 }
@@ -381,11 +386,10 @@ TEST_F(DetectionFusion, APointExtentCarWhoseFrontWasToldFacesIt) {
     const auto tracker = track_one_car(car, boxes, 8);
     ASSERT_EQ(tracker.tracks().size(), 1u);
     EXPECT_FALSE(tracker.tracks()[0].heading_from_motion);
-    const double facing = tracker.tracks()[0].last().T_w_o.block<3, 1>(0, 0).dot(car.pose(7).block<3, 1>(0, 0));
     if (told_from >= 0) {
-      EXPECT_GT(facing, 0.99);
+      EXPECT_GT(facing(tracker.tracks()[0], car), 0.99);
     } else {
-      EXPECT_LT(facing, -0.99);
+      EXPECT_LT(facing(tracker.tracks()[0], car), -0.99);
     }
   }
 }
@@ -410,12 +414,11 @@ TEST_F(DetectionFusion, AStoppedCarNoBoxToldTheFrontOfFacesItsOwnProfile) {
     ASSERT_EQ(tracker.tracks().size(), 1u);
     const objects::ObjectTrack& track = tracker.tracks()[0];
     EXPECT_FALSE(track.heading_from_motion);
-    const double facing = track.last().T_w_o.block<3, 1>(0, 0).dot(car.pose(11).block<3, 1>(0, 0));
     if (profile) {
-      EXPECT_GT(facing, 0.99);
+      EXPECT_GT(facing(track, car), 0.99);
       EXPECT_GE(track.front_profile_m.size(), 5u);
     } else {
-      EXPECT_LT(facing, -0.99);
+      EXPECT_LT(facing(track, car), -0.99);
       EXPECT_TRUE(track.front_profile_m.empty());
     }
   }
@@ -433,7 +436,7 @@ TEST_F(DetectionFusion, APointExtentParkedCarFacesItsRoadSidesTraffic) {
     boxes.far_end_shortfall_m = 0.01;
     boxes.point_extent = true;
     // the last frame's x axis against the car's, with the rule as given
-    auto facing = [&](int road_side_heading) {
+    auto facing_with = [&](int road_side_heading) {
       tracking::ObjectLidarOptions lidar;
       lidar.road_side_heading = road_side_heading;
       auto tracker = make_tracker({}, lidar);
@@ -442,12 +445,11 @@ TEST_F(DetectionFusion, APointExtentParkedCarFacesItsRoadSidesTraffic) {
       EXPECT_EQ(tracker.tracks().size(), 1u);
       if (tracker.tracks().size() != 1u) return 0.0;
       EXPECT_FALSE(tracker.tracks()[0].heading_from_motion);
-      const Vec3 x_axis = tracker.tracks()[0].last().T_w_o.block<3, 1>(0, 0);
-      return x_axis.dot(car.pose(7).block<3, 1>(0, 0));
+      return facing(tracker.tracks()[0], car);
     };
-    EXPECT_GT(facing(1), 0.99) << side;    // right-hand traffic (the default)
-    EXPECT_LT(facing(0), -0.99) << side;   // no rule: the first box's frame
-    EXPECT_LT(facing(-1), -0.99) << side;  // left-hand traffic turns it the other way
+    EXPECT_GT(facing_with(1), 0.99) << side;    // right-hand traffic (the default)
+    EXPECT_LT(facing_with(0), -0.99) << side;   // no rule: the first box's frame
+    EXPECT_LT(facing_with(-1), -0.99) << side;  // left-hand traffic turns it the other way
   }
 }
 
