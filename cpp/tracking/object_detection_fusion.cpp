@@ -157,6 +157,7 @@ void ObjectTracker::attach_detection(int c, const Frame& frame, int d) {
     far_end_w = axis_w.dot(camera_to_box_w) >= 0 ? axis_w : Vec3(-axis_w);
   }
   if (!track.canonical && lidar_options_.canonical_pose) {
+    level_cluster_turn(c);
     make_canonical(c, T_w_box);
     track.canonical_frame = row.frame;
   } else {

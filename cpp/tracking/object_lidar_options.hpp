@@ -64,6 +64,9 @@ struct ObjectLidarOptions {
   double road_side_min_lateral_m = 2.0;     // a box nearer the camera's path than this: no vote
   double road_side_max_lateral_m = 8.0;     // ... nor one farther aside (off the camera's road)
   double road_side_max_angle_deg = 30.0;    // ... nor one whose axis is farther off the travel
+  // a cluster whose rows turned faster than this (mean over its rows before its first box,
+  // deg/frame) made the turn up: its first box levels them to its heading (0: never)
+  double cluster_turn_max_deg_per_frame = 5.0;
   // the canonical frame re-anchored to the mean offset of all its boxes (objects/box_offset.hpp)
   bool refine_canonical = true;
   double refine_min_range_m = 5.0;         // box weight 1 / max(range, this)^2
@@ -175,6 +178,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("road_side_min_lateral_m", o.road_side_min_lateral_m, 0.0, 1000.0);
   visit("road_side_max_lateral_m", o.road_side_max_lateral_m, 0.0, 1000.0);
   visit("road_side_max_angle_deg", o.road_side_max_angle_deg, 0.0, 90.0);
+  visit("cluster_turn_max_deg_per_frame", o.cluster_turn_max_deg_per_frame, 0.0, 180.0);
   visit("refine_canonical", o.refine_canonical, 0, 1);
   visit("refine_min_range_m", o.refine_min_range_m, 0.01, 1000.0);
   visit("refine_min_shift_m", o.refine_min_shift_m, 0.0, 100.0);

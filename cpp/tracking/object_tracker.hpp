@@ -160,6 +160,9 @@ class ObjectTracker : public ObjectBundleTerms {
   int instance_of_box(int d);
   // Box d joins cluster c's last frame: canonical frame (first box), size, e_det.
   void attach_detection(int c, const Frame& frame, int d);
+  // Before cluster c's first box: rows that turned faster than a car turns (a far cluster's
+  // twist from a few points) keep their positions and take its last row's rotation.
+  void level_cluster_turn(int c);
   // The object frame of cluster c becomes the box frame T_w_box at its last frame.
   void make_canonical(int c, const Mat4& T_w_box);
   // Once it has moved heading_from_motion_m, a canonical frame facing backwards turns.

@@ -192,6 +192,12 @@ class LidarObjectsConfig:
     road_side_max_angle_deg: float = param(
         30.0, "road_side_heading: a box whose length axis is farther off the camera's direction "
         "gives no vote (parked across, or turning)", "deg", lo=0.0, hi=90.0)
+    cluster_turn_max_deg_per_frame: float = param(
+        5.0, "a camera-only track whose rows turned faster than this (their mean over the "
+        "frames before its first box) made the turn up from a few far points: the first box "
+        "gives those rows its heading and keeps their positions (a car turns <= ~3 deg/frame "
+        "at 10 Hz; the simulator's sharpest onset is 3.3). MEASURED-PENDING. 0: never",
+        "deg/frame", lo=0.0, hi=180.0)
     refine_canonical: bool = param(
         True, "each new box re-anchors the canonical frame to the weighted mean offset of all "
         "the track's boxes to their poses: the first box alone leaves its noise (the "
