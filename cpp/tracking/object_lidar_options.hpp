@@ -111,7 +111,7 @@ struct ObjectLidarOptions {
   double det_pose_sigma_translation = 0.3; // m
   double det_pose_sigma_rotation = 0.1;    // rad
   double huber_det = 2.0;                  // sigmas
-  double det_sigma_reference_range_m = 0.0;  // m; farther boxes: e_det sigmas x range / it (0: off)
+  double det_sigma_reference_range_m = 20.0;  // m; farther boxes: e_det sigmas x range / it (0: off)
   // e_reg: GICP between consecutive object scans (the points of the frame's scan inside the
   // canonical box, enlarged), registration/gicp.hpp
   bool use_registration = true;
