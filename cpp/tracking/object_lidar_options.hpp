@@ -96,6 +96,10 @@ struct ObjectLidarOptions {
   // count, and lidar_check_min_rows of them decide
   double lidar_check_max_ratio = 0.04;
   double lidar_check_min_offset_m = 1.5;
+  // the other side: points beyond the returns by a median of more than lidar_check_max_far_ratio
+  // of their depth and lidar_check_min_far_offset_m (0: off)
+  double lidar_check_max_far_ratio = 0.08;
+  double lidar_check_min_far_offset_m = 3.0;
   int lidar_check_min_rows = 5;
   int lidar_check_min_returns = 5;
   int lidar_check_min_points = 3;
@@ -195,6 +199,8 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("see_through_shrink_m", o.see_through_shrink_m, 0.0, 10.0);
   visit("lidar_check_max_ratio", o.lidar_check_max_ratio, 0.0, 10.0);
   visit("lidar_check_min_offset_m", o.lidar_check_min_offset_m, 0.0, 1000.0);
+  visit("lidar_check_max_far_ratio", o.lidar_check_max_far_ratio, 0.0, 1.0);
+  visit("lidar_check_min_far_offset_m", o.lidar_check_min_far_offset_m, 0.0, 1000.0);
   visit("lidar_check_min_rows", o.lidar_check_min_rows, 1, 1000000);
   visit("lidar_check_min_returns", o.lidar_check_min_returns, 1, 1000000);
   visit("lidar_check_min_points", o.lidar_check_min_points, 1, 1000000);

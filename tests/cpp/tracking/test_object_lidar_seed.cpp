@@ -188,8 +188,8 @@ TEST_F(LidarSeed, VehicleKeypointsTakeTheirMasksLidarDepth) {
 // corners on a nearer occluder's edge take): its points lie ~4 m before the returns on its
 // mask, so once lidar_check_min_rows rows agree its rows are not reported, the earlier ones
 // too (object_lidar_check.cpp); still tracked, and reported with unbiased stereo, with the
-// check off, or 10 % long (the test is one-sided: points may lie on the far part of the
-// visible surface).
+// check off, or 5 % long (median ratio 0.97, 1.3 m beyond the returns: inside the far side's
+// wider bounds). 15 % long (~5 m beyond) is hidden by the far side, unless that side is off.
 TEST_F(LidarSeed, RowsTheMasksReturnsContradictAreNotReported) {
   car = make_car(rng, Vec3(-2, 0.5, 40), Vec3(0.3, 0, 0.1), 0.0);
   auto reported = [](const objects::ObjectTrack& t) {
@@ -197,10 +197,10 @@ TEST_F(LidarSeed, RowsTheMasksReturnsContradictAreNotReported) {
     for (const auto& r : t.frames) n += r.reported;
     return n;
   };
-  for (const double scale : {1.0, 0.9, 1.1})
+  for (const double scale : {1.0, 0.9, 1.05, 1.15})
     for (const bool check : {true, false}) {
       tracking::ObjectLidarOptions lidar;
-      if (!check) lidar.lidar_check_max_ratio = 0;
+      if (!check) lidar.lidar_check_max_ratio = 0, lidar.lidar_check_max_far_ratio = 0;
       auto tracker = make_tracker({}, lidar);
       run(tracker, 6, [scale](SceneFrame& f) { f.stereo_depth_scale = scale; });
       ASSERT_EQ(tracker.tracks().size(), 1u) << scale << " " << check;
@@ -209,8 +209,18 @@ TEST_F(LidarSeed, RowsTheMasksReturnsContradictAreNotReported) {
       EXPECT_GE(track.hits, 5) << "tracked either way";
       const double depth = (track.last().T_c_w * track.last().T_w_o)(2, 3);
       EXPECT_NEAR(depth, scale * 40.0, 0.04 * scale * 40.0) << "where the stereo placed it";
-      EXPECT_EQ(reported(track), scale < 1.0 && check ? 0 : 6) << scale << " " << check;
+      EXPECT_EQ(reported(track), (scale < 1.0 || scale > 1.07) && check ? 0 : 6)
+          << scale << " " << check;
     }
+  // each side switched off alone leaves the other acting
+  for (const double scale : {0.9, 1.15}) {
+    tracking::ObjectLidarOptions lidar;
+    (scale < 1.0 ? lidar.lidar_check_max_far_ratio : lidar.lidar_check_max_ratio) = 0;
+    auto tracker = make_tracker({}, lidar);
+    run(tracker, 6, [scale](SceneFrame& f) { f.stereo_depth_scale = scale; });
+    ASSERT_EQ(tracker.tracks().size(), 1u) << scale;
+    EXPECT_EQ(reported(tracker.tracks()[0]), 0) << scale << ": the other side is off";
+  }
 }
 
 // The LiDAR sees the car 10 % farther than the stereo in its first 5 frames (a scan moved
