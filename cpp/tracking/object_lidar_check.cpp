@@ -26,8 +26,8 @@ using detail::transform;
 
 void ObjectTracker::hide_lidar_contradicted_tracks(const Frame& frame) {
   const ObjectLidarOptions& o = lidar_options_;
-  if (!scan_ || instances_.empty() || !(o.lidar_check_max_ratio > 0 || o.lidar_check_max_far_ratio > 0))
-    return;
+  const bool either_side = o.lidar_check_max_ratio > 0 || o.lidar_check_max_far_ratio > 0;
+  if (!scan_ || instances_.empty() || !either_side) return;
   for (size_t c = 0; c < tracks_.size(); ++c) {
     objects::ObjectTrack& track = tracks_[c];
     const objects::ObjectCluster& cluster = clusters_[c];
