@@ -82,6 +82,10 @@ struct ObjectTrackingOptions {
   bool final_smoothing = true;
   int smoothing_iterations = 10;     // Ceres iterations of the final smoothing, per track
   int smoothing_frame_observations = 30;  // points join until each frame has this many (0: all)
+  // m; a track without a canonical frame whose smoothing moves its reported rows by a median
+  // of more than this from their online poses keeps its online poses (0: never; config.py
+  // says why 1)
+  double smoothing_max_median_move_m = 1.0;
   // non-holonomic prior in the window (optim/heading_cost.hpp), planar-link classes
   bool nonholonomic = true;
   double lateral_sigma_m = 0.02;     // m/frame across the travel axis
@@ -168,6 +172,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("final_smoothing", o.final_smoothing, 0, 1);
   visit("smoothing_iterations", o.smoothing_iterations, 1, 1000);
   visit("smoothing_frame_observations", o.smoothing_frame_observations, 0, 1000000);
+  visit("smoothing_max_median_move_m", o.smoothing_max_median_move_m, 0.0, 1000.0);
   visit("nonholonomic", o.nonholonomic, 0, 1);
   visit("lateral_sigma_m", o.lateral_sigma_m, 1e-4, 100.0);
   visit("travel_min_path_m", o.travel_min_path_m, 0.0, 10000.0);

@@ -290,6 +290,18 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
     if (lidar_terms) wo.reprojection_sigma_scale = lidar_options_.smoothing_keypoint_sigma_scale;
     const optim::VisualObjectWindowSummary s = optim::refine_visual_object_window(camera_, w, track.Pi, wo);
     if (!s.usable) continue;
+    // a camera-only track that the smoothing moves off its online rows as a whole, not just
+    // at a far birth, was pulled off its car (config.py, smoothing_max_median_move_m)
+    if (!track.canonical && options_.smoothing_max_median_move_m > 0) {
+      std::vector<double> moves_m;
+      for (int r = 0; r < rows; ++r)
+        if (track.frames[r].reported)
+          moves_m.push_back((w.T_w_o[r].topRightCorner<3, 1>() - track.frames[r].T_w_o.topRightCorner<3, 1>()).norm());
+      if (!moves_m.empty() && detail::median_value(moves_m) > options_.smoothing_max_median_move_m) {
+        ++report.num_rejected;
+        continue;
+      }
+    }
     std::vector<Mat4> online;
     online.reserve(rows);
     for (const objects::TrackFrame& row : track.frames) online.push_back(row.T_w_o);

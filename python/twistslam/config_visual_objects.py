@@ -265,6 +265,16 @@ class VisualObjectsConfig:
         "tracked 100 frames has ~2000 points and 18k observations, most short-lived: with 30, "
         "100-200 points and 3-5k observations, 2x faster and better (crowded s0 oracle boxes "
         "RPE_r 0.204 -> 0.143 deg/m, aligned ATE 0.047 -> 0.017 m)", "observations")
+    smoothing_max_median_move_m: float = param(
+        1.0, "a track without a canonical frame (no 3D box) whose final smoothing moves its "
+        "reported rows by a median of more than this from their online poses keeps its "
+        "online poses (0: never). Nothing but its keypoints and e_const place such a track, "
+        "and a short one with few tracked rows can be pulled off its car as a whole: urban "
+        "s13's DIS track 23 (median 2.40 m) followed the oncoming car 22 within 1-2 m online "
+        "and was smoothed 3-5.5 m off it, urban s5's DIS track 44 (3.34 m): two ghosts. The "
+        "other camera-only tracks the smoothing moved by more than 1.5 m anywhere (urban s1, "
+        "s5, s6, s13) had medians of 0.02-0.28 m: a far birth row corrected, which the "
+        "smoothing must keep", "m", lo=0.0, hi=1000.0)
     nonholonomic: bool = param(
         True, "vehicles (planar-link classes) move along their heading: the window adds "
         "e_head, the measured step across the travel axis learned from the track (not in "

@@ -99,6 +99,36 @@ TEST_F(SmoothingScene, FinalSmoothingBringsAFarCarsStepsCloserToTheTruthAndKeeps
   }
 }
 
+// smoothing_max_median_move_m: a camera-only track whose smoothing would move its reported
+// rows by a median beyond the bound keeps its online poses (counted as rejected); within it,
+// it is smoothed as before. The noisy car's smoothing moves its rows by millimetres.
+TEST_F(SmoothingScene, ATrackTheSmoothingWouldMoveTooFarKeepsItsOnlinePoses) {
+  for (double bound_m : {1e-5, 10.0}) {
+    std::mt19937 noise(5);
+    const Car car = make_car(rng, Vec3(-3, 0.5, 28), Vec3(0.25, 0, 0.6), 0.01);
+    tracking::ObjectTrackingOptions options;
+    options.smoothing_max_median_move_m = bound_m;
+    auto tracker = make_tracker(options);
+    run_noisy_car(tracker, car, background, 20, noise);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    const std::vector<Mat4> online = poses_of(tracker.tracks()[0]);
+    const tracking::ObjectSmoothingReport report = tracker.smooth_tracks(static_camera(20));
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    if (bound_m < 1.0) {
+      EXPECT_EQ(report.num_tracks, 0);
+      EXPECT_EQ(report.num_rejected, 1);
+      EXPECT_TRUE(track.T_w_o_online.empty());
+      for (size_t r = 0; r < online.size(); ++r) EXPECT_TRUE(track.frames[r].T_w_o == online[r]) << r;
+    } else {
+      EXPECT_EQ(report.num_tracks, 1);
+      EXPECT_EQ(report.num_rejected, 0);
+      bool moved = false;
+      for (size_t r = 0; r < online.size(); ++r) moved |= !(track.frames[r].T_w_o == online[r]);
+      EXPECT_TRUE(moved);
+    }
+  }
+}
+
 TEST_F(SmoothingScene, AClusterNeverTrackedKeepsItsRows) {
   // a car whose keypoints change descriptors every frame: no point is found again, each frame
   // re-seeds the cluster from its stereo points, the twist never succeeds (hits 1). Nothing
