@@ -36,6 +36,17 @@ void run_noisy_car(tracking::ObjectTracker& tracker, const Car& car, const Backg
   }
 }
 
+// A tracker with `options` that followed the noisy car 28 m ahead for `frames` frames.
+tracking::ObjectTracker noisy_car_tracker(const tracking::ObjectTrackingOptions& options,
+                                          std::mt19937& rng, const Background& background,
+                                          int frames, unsigned noise_seed) {
+  std::mt19937 noise(noise_seed);
+  const Car car = make_car(rng, Vec3(-3, 0.5, 28), Vec3(0.25, 0, 0.6), 0.01);
+  auto tracker = make_tracker(options);
+  run_noisy_car(tracker, car, background, frames, noise);
+  return tracker;
+}
+
 // Mean error of the frame-to-frame motions of `poses` (rows of frames first..) against the
 // car's: translation (m) and rotation (deg).
 std::pair<double, double> step_errors(const std::vector<Mat4>& poses, const Car& car, int first) {
@@ -104,12 +115,9 @@ TEST_F(SmoothingScene, FinalSmoothingBringsAFarCarsStepsCloserToTheTruthAndKeeps
 // it is smoothed as before. The noisy car's smoothing moves its rows by millimetres.
 TEST_F(SmoothingScene, ATrackTheSmoothingWouldMoveTooFarKeepsItsOnlinePoses) {
   for (double bound_m : {1e-5, 10.0}) {
-    std::mt19937 noise(5);
-    const Car car = make_car(rng, Vec3(-3, 0.5, 28), Vec3(0.25, 0, 0.6), 0.01);
     tracking::ObjectTrackingOptions options;
     options.smoothing_max_median_move_m = bound_m;
-    auto tracker = make_tracker(options);
-    run_noisy_car(tracker, car, background, 20, noise);
+    auto tracker = noisy_car_tracker(options, rng, background, 20, 5);
     ASSERT_EQ(tracker.tracks().size(), 1u);
     const std::vector<Mat4> online = poses_of(tracker.tracks()[0]);
     const tracking::ObjectSmoothingReport report = tracker.smooth_tracks(static_camera(20));
@@ -147,12 +155,9 @@ TEST_F(SmoothingScene, AClusterNeverTrackedKeepsItsRows) {
 }
 
 TEST_F(SmoothingScene, WithoutFinalSmoothingNothingIsArchivedOrChanged) {
-  std::mt19937 noise(7);
-  const Car car = make_car(rng, Vec3(-3, 0.5, 28), Vec3(0.25, 0, 0.6), 0.01);
   tracking::ObjectTrackingOptions options;
   options.final_smoothing = false;
-  auto tracker = make_tracker(options);
-  run_noisy_car(tracker, car, background, 12, noise);
+  auto tracker = noisy_car_tracker(options, rng, background, 12, 7);
   ASSERT_EQ(tracker.tracks().size(), 1u);
   for (const auto& p : tracker.clusters()[0].points) EXPECT_TRUE(p.archive.empty());
   EXPECT_TRUE(tracker.clusters()[0].retired.empty());
@@ -163,10 +168,7 @@ TEST_F(SmoothingScene, WithoutFinalSmoothingNothingIsArchivedOrChanged) {
 }
 
 TEST_F(SmoothingScene, ATrackWithAFrameWithoutACameraPoseIsLeftOnline) {
-  std::mt19937 noise(8);
-  const Car car = make_car(rng, Vec3(-3, 0.5, 28), Vec3(0.25, 0, 0.6), 0.01);
-  auto tracker = make_tracker();
-  run_noisy_car(tracker, car, background, 12, noise);
+  auto tracker = noisy_car_tracker({}, rng, background, 12, 8);
   std::map<int, Mat4> cams = static_camera(12);
   cams.erase(5);  // a lost frame
   EXPECT_EQ(tracker.smooth_tracks(cams).num_tracks, 0);
