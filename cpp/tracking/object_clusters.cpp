@@ -22,6 +22,11 @@ using detail::median_value;
 using detail::observe;
 using detail::transform;
 
+namespace {
+// the spread recenter_max_spread_m bounds: between the 10 % and 90 % quantiles, so that a
+// few wrong points at either end do not count
+constexpr double kRecenterSpreadQuantile = 0.1;
+}  // namespace
 
 std::vector<std::pair<int, Vec3>> ObjectTracker::free_instance_points(const Frame& frame,
                                                                       int instance) const {
@@ -273,6 +278,14 @@ void ObjectTracker::recenter(int c) {
   if (static_cast<int>(confirmed.size()) < options_.min_inliers) return;
   const Vec3 centre = median_point(confirmed);
   if (centre.norm() <= options_.recenter_distance_m) return;
+  // a far cluster's points spread wider than a car is long disagree about where it is (a far
+  // track whose depth motion lagged placed its later points metres ahead of its origin): their
+  // median is no centre, and moving every row onto it would move the rows they never saw too
+  if (options_.recenter_max_spread_m > 0 &&
+      detail::largest_quantile_spread(confirmed, kRecenterSpreadQuantile) > options_.recenter_max_spread_m) {
+    const objects::TrackFrame& last = tracks_[c].frames.back();
+    if (transform(last.T_c_w * last.T_w_o, Vec3::Zero()).z() > options_.recenter_spread_min_depth_m) return;
+  }
   // T_w_o' = T_w_o T_o_o' with T_o_o' a translation by centre: the twists of eq. 2 act on the
   // left (T_w_o(i+1) = exp(Pi xi) T_w_o(i)), so they are unchanged
   for (objects::TrackFrame& row : tracks_[c].frames)

@@ -42,6 +42,21 @@ inline double median_value(std::vector<double> values) {
   return *mid;
 }
 
+// The largest, over the three axes, of the spread between the points' lower and upper quantile
+// (quantile and 1 - quantile, 0 <= quantile < 0.5). points must not be empty.
+inline double largest_quantile_spread(const std::vector<Vec3>& points, double quantile) {
+  std::vector<double> values(points.size());
+  const auto lo = static_cast<std::ptrdiff_t>(quantile * static_cast<double>(points.size() - 1));
+  const auto hi = static_cast<std::ptrdiff_t>(points.size() - 1) - lo;
+  double largest = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    for (size_t i = 0; i < points.size(); ++i) values[i] = points[i][a];
+    std::sort(values.begin(), values.end());
+    largest = std::max(largest, values[static_cast<size_t>(hi)] - values[static_cast<size_t>(lo)]);
+  }
+  return largest;
+}
+
 // The scan's points (frame c) inside the box of size (l, w, h) at T_c_o, grown by margin on
 // every side but the bottom, which is raised by ground_clearance; returned in frame x
 // (object_scans.cpp).

@@ -77,6 +77,11 @@ struct ObjectTrackingOptions {
   int window_iterations = 5;        // Ceres iterations of the window
   double window_function_tolerance = 1e-3;  // the window stops at a smaller relative cost change (config.py)
   double recenter_distance_m = 0.5; // origin moved to the points' median beyond this (0: never)
+  // ... unless the confirmed points' 10-90 % spread along an axis exceeds recenter_max_spread_m
+  // (0: no limit) while the origin lies farther than recenter_spread_min_depth_m (m; config.py
+  // says why these values)
+  double recenter_max_spread_m = 6.0;
+  double recenter_spread_min_depth_m = 25.0;
   // once the sequence ends, every track's rows, all observations of its points and its LiDAR
   // terms in one problem (tracking/object_smoothing.cpp); the online poses are kept beside
   bool final_smoothing = true;
@@ -169,6 +174,8 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("window_iterations", o.window_iterations, 1, 1000);
   visit("window_function_tolerance", o.window_function_tolerance, 0.0, 1.0);  // of the cost
   visit("recenter_distance_m", o.recenter_distance_m, 0.0, 1000.0);
+  visit("recenter_max_spread_m", o.recenter_max_spread_m, 0.0, 1000.0);
+  visit("recenter_spread_min_depth_m", o.recenter_spread_min_depth_m, 0.0, 10000.0);
   visit("final_smoothing", o.final_smoothing, 0, 1);
   visit("smoothing_iterations", o.smoothing_iterations, 1, 1000);
   visit("smoothing_frame_observations", o.smoothing_frame_observations, 0, 1000000);

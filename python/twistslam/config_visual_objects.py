@@ -247,6 +247,18 @@ class VisualObjectsConfig:
         0.5, "the object frame's origin moves to the median of the cluster's confirmed points "
         "when farther than this: a cluster born at 40 m sits metres off in depth until its "
         "points are refined closer (0: never)", "m")
+    recenter_max_spread_m: float = param(
+        6.0, "... unless the confirmed points spread wider than this between their 10 % and 90 % "
+        "quantiles along an object axis while the origin lies beyond recenter_spread_min_depth_m "
+        "(0: no limit): a far track whose depth motion lagged placed its later points metres "
+        "ahead of its origin, and their median moved every row, the first ones too (urban s7's "
+        "lead car at 44-60 m: spreads of 8-10.5 m, 6.7 m off at frame 0, a ghost; its recentres "
+        "at 36-45 m spread 1.9-4.6 m). 7.5 m gave the same on urban 7, 8 and 12", "m")
+    recenter_spread_min_depth_m: float = param(
+        25.0, "... the bound applies only beyond this depth of the origin: near, the stereo "
+        "holds the points and a messy cluster's median is still its best centre (ungated, "
+        "crowded s7's car 12 at 15 m, spreads 5-10 m: aligned ATE 0.089 -> 0.245 m; crowded "
+        "s1's car 17 0.02 -> 0.98 coverage; the crowded cars all lie within 20 m)", "m")
     final_smoothing: bool = param(
         True, "when the run ends, every track is refined once more in one problem: all its rows, "
         "every observation of its points (culled ones too), e_const, e_link, e_head and the "
