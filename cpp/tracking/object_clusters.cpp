@@ -275,6 +275,12 @@ void ObjectTracker::recenter(int c) {
   std::vector<Vec3> confirmed;
   for (const objects::ObjectPoint& p : cluster.points)
     if (p.found >= 2) confirmed.push_back(p.X_o);
+  // the points the track confirmed and later culled (kept for the final smoothing) still say
+  // where its earlier rows saw the car: with them the median converges instead of following
+  // whichever points are live now
+  if (options_.recenter_with_retired_points)
+    for (const objects::ObjectPoint& p : cluster.retired)
+      if (p.found >= 2) confirmed.push_back(p.X_o);
   if (static_cast<int>(confirmed.size()) < options_.min_inliers) return;
   const Vec3 centre = median_point(confirmed);
   if (centre.norm() <= options_.recenter_distance_m) return;

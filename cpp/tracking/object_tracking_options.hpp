@@ -82,6 +82,8 @@ struct ObjectTrackingOptions {
   // says why these values)
   double recenter_max_spread_m = 6.0;
   double recenter_spread_min_depth_m = 25.0;
+  // the median over the retired points too (those final_smoothing keeps; config.py says why)
+  bool recenter_with_retired_points = false;
   // once the sequence ends, every track's rows, all observations of its points and its LiDAR
   // terms in one problem (tracking/object_smoothing.cpp); the online poses are kept beside
   bool final_smoothing = true;
@@ -176,6 +178,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("recenter_distance_m", o.recenter_distance_m, 0.0, 1000.0);
   visit("recenter_max_spread_m", o.recenter_max_spread_m, 0.0, 1000.0);
   visit("recenter_spread_min_depth_m", o.recenter_spread_min_depth_m, 0.0, 10000.0);
+  visit("recenter_with_retired_points", o.recenter_with_retired_points, 0, 1);
   visit("final_smoothing", o.final_smoothing, 0, 1);
   visit("smoothing_iterations", o.smoothing_iterations, 1, 1000);
   visit("smoothing_frame_observations", o.smoothing_frame_observations, 0, 1000000);

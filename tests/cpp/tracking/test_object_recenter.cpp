@@ -39,6 +39,7 @@ struct MovingBox {
   Vec3 c0{-2, 0.5, 15};
   Vec3 velocity{0.3, 0, 0.05};  // m/frame
   double yaw_rate = 0.01;       // rad/frame about kUp
+  int hide_front_from = -1;     // from this frame on, points with x_o > 0 are not seen (-1: never)
   Mat4 pose(int i) const {
     return geometry::make_pose(geometry::so3_exp(kUp * (yaw_rate * i)), c0 + velocity * i);
   }
@@ -58,6 +59,7 @@ struct BoxFrame {
     double u0 = 1e9, v0 = 1e9, u1 = -1e9, v1 = -1e9;
     for (size_t k = 0; k < box.X_o.size(); ++k) {
       if (i == 0 && box.X_o[k].x() <= kFirstSeenX) continue;
+      if (box.hide_front_from >= 0 && i >= box.hide_front_from && box.X_o[k].x() > 0) continue;
       const Vec3 X = transform(box.pose(i), box.X_o[k]);
       const Vec2 uv = cam.project(X), uv_prev = cam.project(transform(box.pose(i - 1), box.X_o[k]));
       add(cam, X, box.descriptors[k], kCarClass, static_cast<int>(k % 3));
@@ -233,6 +235,41 @@ TEST(ObjectTrackerRecenter, AFarClusterSpreadWiderThanTheBoundKeepsItsOrigin) {
   EXPECT_LT((first_position(bounded) - centroid).norm(), 0.05);
   EXPECT_GT((first_position(unbounded) - centroid).norm(), 1.0);
   EXPECT_GT((first_position(near) - centroid).norm(), 1.0);
+}
+
+// recenter_with_retired_points: the box's front half is seen in frames 0-3 only, so its points
+// are culled (retired for the final smoothing) once predicted often enough without a match.
+// With them the re-centring's median stays on the whole box; without them it follows the back
+// half that is left.
+TEST(ObjectTrackerRecenter, RetiredPointsKeepTheMedianOnTheWholeObject) {
+  MovingBox box;
+  box.hide_front_from = 4;
+  std::mt19937 rng(79);
+  std::uniform_real_distribution<double> x(-3.0, 3.0), y(-0.75, 0.75), z(-0.9, 0.9);
+  for (int k = 0; k < 120; ++k) {  // back half's median ~1.5 m behind the whole box's
+    box.X_o.emplace_back(x(rng), y(rng), z(rng));
+    box.descriptors.push_back(random_descriptor(rng));
+  }
+  constexpr int kFrames = 30;  // the front points are culled after ~16 predictions
+  tracking::ObjectTrackingOptions options;
+  ASSERT_TRUE(options.final_smoothing);  // retired points are kept for it
+  options.recenter_with_retired_points = true;
+  const RecenterRun with = track_box(box, options.recenter_distance_m, kFrames, options);
+  options.recenter_with_retired_points = false;
+  const RecenterRun without = track_box(box, options.recenter_distance_m, kFrames, options);
+  ASSERT_EQ(with.track.frames.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(without.track.frames.size(), static_cast<size_t>(kFrames));
+  ASSERT_FALSE(with.cluster.retired.empty());  // the premise: the front points were culled
+
+  // the last origin against the box's centre, along the box's own x axis
+  const auto offset_x = [&](const RecenterRun& run) {
+    const Mat4 T_o_w = geometry::se3_inverse(box.pose(kFrames - 1));
+    return transform(T_o_w, run.track.last().T_w_o.topRightCorner<3, 1>()).x();
+  };
+  std::cout << "[ recenter ] retired points: origin " << offset_x(with) << " m along x from the box "
+            << "centre (without them: " << offset_x(without) << " m)\n";
+  EXPECT_LT(std::abs(offset_x(with)), 0.8);
+  EXPECT_LT(offset_x(without), -1.0);  // on the back half
 }
 
 }  // namespace
