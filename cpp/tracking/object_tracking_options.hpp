@@ -83,7 +83,7 @@ struct ObjectTrackingOptions {
   double recenter_max_spread_m = 6.0;
   double recenter_spread_min_depth_m = 25.0;
   // the median over the retired points too (those final_smoothing keeps; config.py says why)
-  bool recenter_with_retired_points = false;
+  bool recenter_with_retired_points = true;
   // once the sequence ends, every track's rows, all observations of its points and its LiDAR
   // terms in one problem (tracking/object_smoothing.cpp); the online poses are kept beside
   bool final_smoothing = true;

@@ -260,12 +260,12 @@ class VisualObjectsConfig:
         "crowded s7's car 12 at 15 m, spreads 5-10 m: aligned ATE 0.089 -> 0.245 m; crowded "
         "s1's car 17 0.02 -> 0.98 coverage; the crowded cars all lie within 20 m)", "m")
     recenter_with_retired_points: bool = param(
-        False, "the re-centring's median also counts the confirmed points the track culled "
+        True, "the re-centring's median also counts the confirmed points the track culled "
         "(kept only with final_smoothing): the median then converges instead of following "
         "whichever points are live. 22 simulated sequences (urban 0-8 10-13, crowded 0-8, files "
         "and DIS flow), off -> on: cars >= 90 % 104 -> 106 of 107 in both rows (crowded s1's "
         "car 17, crowded s8's car 15), ghosts 1 -> 1 and 2 -> 2, aligned ATE 0.097 -> 0.090 m "
-        "(files). Off until the LiDAR rows and real KITTI are measured with it")
+        "(files); the LiDAR rows (urban 0 2 8) identical, real 0001 within 1 mm")
     final_smoothing: bool = param(
         True, "when the run ends, every track is refined once more in one problem: all its rows, "
         "every observation of its points (culled ones too), e_const, e_link, e_head and the "
