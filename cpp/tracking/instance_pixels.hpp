@@ -1,5 +1,6 @@
 #pragma once
-// Reading a per-pixel instance image (CV_32SC1, 0: no instance) at keypoints.
+// Reading per-pixel images at keypoints: instance ids (CV_32SC1, 0: no instance) and
+// optical flow (CV_32FC2).
 #include <opencv2/core/mat.hpp>
 
 #include "geometry/types.hpp"
@@ -17,5 +18,9 @@ int pixel_value(const cv::Mat& image, const Vec2& uv);
 // the static background) do not count: a car's silhouette against the sky or a wall is the
 // car's own (the car is the nearer surface). radius_px <= 0: the pixel's value alone.
 int instance_at_keypoint(const cv::Mat& instances, const Vec2& uv, double radius_px);
+
+// The pixel uv moves to by the flow (bilinear, CV_32FC2 u, v per pixel); false where the
+// flow is empty or missing (NaN) or uv lies outside the image.
+bool flow_at(const cv::Mat& flow, const Vec2& uv, Vec2* out);
 
 }  // namespace twistslam::tracking

@@ -21,25 +21,6 @@ using detail::contains;
 using detail::observe;
 using detail::transform;
 
-// Bilinear flow at uv; false where it is missing (NaN) or uv lies outside the image.
-bool flow_at(const cv::Mat& flow, const Vec2& uv, Vec2* out) {
-  if (flow.empty()) return false;
-  const double x = uv.x(), y = uv.y();
-  if (!(x >= 0 && y >= 0 && x <= flow.cols - 1 && y <= flow.rows - 1)) return false;
-  const int x0 = std::min(static_cast<int>(x), flow.cols - 2 < 0 ? 0 : flow.cols - 2);
-  const int y0 = std::min(static_cast<int>(y), flow.rows - 2 < 0 ? 0 : flow.rows - 2);
-  const int x1 = std::min(x0 + 1, flow.cols - 1), y1 = std::min(y0 + 1, flow.rows - 1);
-  const double ax = x - x0, ay = y - y0;
-  Vec2 f = Vec2::Zero();
-  const cv::Vec2f f00 = flow.at<cv::Vec2f>(y0, x0), f01 = flow.at<cv::Vec2f>(y0, x1),
-                  f10 = flow.at<cv::Vec2f>(y1, x0), f11 = flow.at<cv::Vec2f>(y1, x1);
-  for (int k = 0; k < 2; ++k)
-    f[k] = (1 - ay) * ((1 - ax) * f00[k] + ax * f01[k]) + ay * ((1 - ax) * f10[k] + ax * f11[k]);
-  if (!f.allFinite()) return false;
-  *out = uv + f;
-  return true;
-}
-
 // Search window scale for a cluster without a velocity (its first frames): 3 x 12 px covers a
 // car crossing the image at 15 m and 18 km/h relative speed between two frames.
 constexpr double kNewbornSearchScale = 3.0;
@@ -177,21 +158,38 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
   matches.erase(std::remove_if(matches.begin(), matches.end(),
                                [&](const Match& m) { return !keypoint_allowed(m.keypoint, instance); }),
                 matches.end());
+  // observations: the keypoint matches, then (few matches) the flow-located points
+  const double depth_pred = (frame.T_c_w * T_w_o_pred)(2, 3);
+  std::vector<FlowObservation> flow_obs = flow_observations(cluster, matches, instance, depth_pred);
+  size_t estimated_matches = 0;  // est.inlier: these matches, then estimated_flow
+  std::vector<FlowObservation> estimated_flow;
   auto estimate = [&](const Vec6& xi_init) {
+    estimated_matches = matches.size();
+    estimated_flow = flow_obs;
     std::vector<objects::TwistObservation> obs;
-    obs.reserve(matches.size());
+    obs.reserve(matches.size() + flow_obs.size());
     for (const Match& m : matches) obs.push_back(observation(cluster.points[m.point], frame, m.keypoint));
+    for (const FlowObservation& f : flow_obs) {
+      objects::TwistObservation o;
+      o.X_o = cluster.points[f.point].X_o;
+      o.uv = f.uv;
+      o.inv_sigma2 = weights_.at(cluster.points[f.point].last.octave);
+      obs.push_back(o);
+    }
     return objects::estimate_object_twist(camera_, frame.T_c_w, T_w_o_prev, track.Pi, obs,
                                           xi_init, lm_options_);
   };
+  auto enough = [&] { return static_cast<int>(matches.size() + flow_obs.size()) >= options_.min_inliers; };
   objects::TwistEstimate est;
-  if (static_cast<int>(matches.size()) >= options_.min_inliers) est = estimate(track.Pi * cluster.velocity);
+  if (enough()) est = estimate(track.Pi * cluster.velocity);
   // second pass (eq. 4): project every point with the new pose, re-match, optimise again
   const Mat4 T_w_o_first = est.valid ? est.T_w_o : T_w_o_pred;
   const size_t before = matches.size();
   refine_matches(cluster, frame.T_c_w * T_w_o_first, frame, instance, &matches);
-  if (matches.size() > before && static_cast<int>(matches.size()) >= options_.min_inliers)
-    est = estimate(est.valid ? est.xi : Vec6(track.Pi * cluster.velocity));
+  if (matches.size() > before) {
+    flow_obs = flow_observations(cluster, matches, instance, depth_pred);
+    if (enough()) est = estimate(est.valid ? est.xi : Vec6(track.Pi * cluster.velocity));
+  }
   const bool valid = est.valid && est.num_inliers >= options_.min_inliers &&
                      (est.T_w_o.topRightCorner<3, 1>() - T_w_o_prev.topRightCorner<3, 1>()).norm() <=
                          options_.max_step_m;
@@ -261,7 +259,7 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     if (X_c.z() > 0.1 && camera_.in_image(camera_.project(X_c))) ++p.visible;
   }
   if (valid) {
-    for (size_t j = 0; j < matches.size(); ++j) {
+    for (size_t j = 0; j < estimated_matches; ++j) {
       if (!est.inlier[j]) continue;
       const Match& m = matches[j];
       objects::ObjectPoint& p = cluster.points[m.point];
@@ -272,6 +270,14 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
       p.class_votes.add(frame.keypoints.label[m.keypoint]);
       ++p.found;
       claimed_by_[m.keypoint] = c;
+    }
+    // a flow-located point keeps its chain (the next frame's flow starts at this pixel)
+    for (size_t j = 0; j < estimated_flow.size(); ++j) {
+      if (!est.inlier[estimated_matches + j]) continue;
+      objects::ObjectPoint& p = cluster.points[estimated_flow[j].point];
+      observe(p, {frame.index, estimated_flow[j].uv, -1.0, p.last.octave}, options_.window_frames,
+              options_.final_smoothing);
+      ++p.found;
     }
   }
   if (valid || box_kept) register_scan(c, frame);
@@ -316,6 +322,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& input_frame, const cv::Ma
   up_w_ = up_w;
   instances_ = instances;
   labels_ = labels;
+  flow_ = flow;
   road_plane_w_ = road_plane_w;
   while (static_cast<int>(T_c_w_of_frame_.size()) > std::max(options_.window_frames, 2) + 1)
     T_c_w_of_frame_.erase(T_c_w_of_frame_.begin());
@@ -324,6 +331,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& input_frame, const cv::Ma
   // with 3D boxes a box places its car: the border rule is the LiDAR fusion's own
   const bool boxed = lidar_options_.use_detections && !detections.empty();
   const double border_px = boxed ? lidar_options_.instance_border_px : options_.instance_border_px;
+  instance_border_px_ = border_px;
   depth_fill_below_points_ =
       boxed ? lidar_options_.depth_fill_below_points : options_.depth_fill_below_points;
   if (!instances.empty())
@@ -404,6 +412,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& input_frame, const cv::Ma
   // the caller's images are this call's only: no view of them outlives it
   instances_.release();
   labels_.release();
+  flow_.release();
   detections_.clear();
   scan_ = nullptr;
   mask_lidar_depths_.clear();

@@ -122,12 +122,25 @@ class ObjectTracker : public ObjectBundleTerms {
     int keypoint;
     int distance;  // Hamming bits
   };
+  // a point located by the optical flow alone (no keypoint there): a mono observation
+  struct FlowObservation {
+    int point;
+    Vec2 uv;  // px, flow-predicted pixel in the current left image
+  };
   // Step 1: the cluster's points searched in the frame from their last observation (flow)
   // or the predicted pose; fills the association evidence.
   std::vector<Match> search_cluster(const objects::ObjectCluster& cluster, const Mat4& T_c_o,
                                     const Frame& frame, const cv::Mat& instances,
                                     const cv::Mat& flow,
                                     objects::ClusterInstanceEvidence* evidence) const;
+  // Step 3, a cluster depth_m away (its predicted origin, camera z) beyond
+  // flow_observations_min_depth_m with fewer keypoint matches than
+  // flow_observations_below_matches: its
+  // unmatched points seen in the last frame at their flow-predicted pixels on its instance
+  // (object_flow_observations.cpp).
+  std::vector<FlowObservation> flow_observations(const objects::ObjectCluster& cluster,
+                                                 const std::vector<Match>& matches,
+                                                 int instance, double depth_m) const;
   // Step 3's second pass: points not matched yet, projected with the estimated pose.
   void refine_matches(const objects::ObjectCluster& cluster, const Mat4& T_c_o,
                       const Frame& frame, int instance, std::vector<Match>* matches) const;
@@ -323,7 +336,8 @@ class ObjectTracker : public ObjectBundleTerms {
   std::vector<objects::ObjectCluster> clusters_;  // clusters_[k] holds tracks_[k]'s points
   std::map<int, Mat4> T_c_w_of_frame_;  // camera poses of the recent frames (window)
   Vec3 up_w_ = Vec3(0, -1, 0);          // the road normal of the frame being tracked
-  cv::Mat instances_, labels_;          // during track(): the caller's images (views)
+  cv::Mat instances_, labels_, flow_;   // during track(): the caller's images (views)
+  double instance_border_px_ = 0;       // during track(): the keypoints' instance border rule
   Vec4 road_plane_w_ = Vec4::Zero();    // its road plane (zero: none)
   std::vector<objects::Detection> detections_;  // during track(): the frame's boxes (frame c)
   std::vector<char> detection_used_;            // ... associated with a cluster

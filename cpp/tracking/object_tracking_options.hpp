@@ -51,6 +51,10 @@ struct ObjectTrackingOptions {
   int min_shared_points = 5;        // matched points an instance must share with a cluster
   double min_mask_overlap = 0.5;    // fraction of projected cluster points inside the mask
   int min_inliers = 6;              // inliers of the twist LM for a tracked frame
+  // fewer keypoint matches than this: the flow-predicted pixels of the cluster's points seen
+  // in the last frame join the twist LM as mono observations (0: off)
+  int flow_observations_below_matches = 0;
+  double flow_observations_min_depth_m = 0;  // ... when its origin lies at least this far (m)
   double max_step_m = 5.0;          // object motion per frame beyond this is no motion (a fit gone wrong)
   int max_misses = 5;               // frames without a valid twist before the track ends
   int reseed_after_misses = 1;      // failed frames before new points replace a cluster's (0: never)
@@ -154,6 +158,8 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("min_shared_points", o.min_shared_points, 1, 100000);
   visit("min_mask_overlap", o.min_mask_overlap, 0.0, 1.0);
   visit("min_inliers", o.min_inliers, 3, 100000);  // 3 points fix a rigid motion
+  visit("flow_observations_below_matches", o.flow_observations_below_matches, 0, 100000);
+  visit("flow_observations_min_depth_m", o.flow_observations_min_depth_m, 0.0, 10000.0);
   visit("max_step_m", o.max_step_m, 0.01, 1000.0);
   visit("max_misses", o.max_misses, 0, 100000);
   visit("reseed_after_misses", o.reseed_after_misses, 0, 100000);
