@@ -6,9 +6,11 @@
 // position (eq. 4); where none is found, the flow itself located the point. Such a point
 // joins the LM as a mono observation at that pixel (no keypoint, so no disparity), when the
 // pixel and its neighbourhood lie on the cluster's instance: at a silhouette the flow of the
-// background bleeds in. Off by default (ObjectTrackingOptions): on 22 simulated sequences it
-// traded urban s12's far ghosts for others (a mono observation shows no depth motion, and a
-// far oncoming track still stalls); docs/visual_objects.md has the figures.
+// background bleeds in. Only beyond 40 m by default (ObjectTrackingOptions): a mono
+// observation shows no motion along the line of sight, and nearer, where keypoints are
+// plenty, far oncoming tracks at 35-45 m stalled on them. Not for a track with a canonical
+// (box) frame: its boxes place it, and the classical row's urban s8 gained a ghost with them.
+// docs/visual_objects.md has the figures.
 #include <algorithm>
 #include <cmath>
 
@@ -32,10 +34,10 @@ bool inside_instance(const cv::Mat& instances, const Vec2& uv, int instance, dou
 
 std::vector<ObjectTracker::FlowObservation> ObjectTracker::flow_observations(
     const objects::ObjectCluster& cluster, const std::vector<Match>& matches, int instance,
-    double depth_m) const {
+    double depth_m, bool canonical) const {
   std::vector<FlowObservation> out;
   const int below = options_.flow_observations_below_matches;
-  if (below <= 0 || static_cast<int>(matches.size()) >= below || instance <= 0 || flow_.empty() ||
+  if (below <= 0 || canonical || static_cast<int>(matches.size()) >= below || instance <= 0 || flow_.empty() ||
       instances_.empty() || depth_m < options_.flow_observations_min_depth_m)
     return out;
   std::vector<std::uint8_t> matched(cluster.points.size(), 0);

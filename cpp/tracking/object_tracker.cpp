@@ -160,7 +160,7 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
                 matches.end());
   // observations: the keypoint matches, then (few matches) the flow-located points
   const double depth_pred = (frame.T_c_w * T_w_o_pred)(2, 3);
-  std::vector<FlowObservation> flow_obs = flow_observations(cluster, matches, instance, depth_pred);
+  std::vector<FlowObservation> flow_obs = flow_observations(cluster, matches, instance, depth_pred, track.canonical);
   size_t estimated_matches = 0;  // est.inlier: these matches, then estimated_flow
   std::vector<FlowObservation> estimated_flow;
   auto estimate = [&](const Vec6& xi_init) {
@@ -187,7 +187,7 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
   const size_t before = matches.size();
   refine_matches(cluster, frame.T_c_w * T_w_o_first, frame, instance, &matches);
   if (matches.size() > before) {
-    flow_obs = flow_observations(cluster, matches, instance, depth_pred);
+    flow_obs = flow_observations(cluster, matches, instance, depth_pred, track.canonical);
     if (enough()) est = estimate(est.valid ? est.xi : Vec6(track.Pi * cluster.velocity));
   }
   const bool valid = est.valid && est.num_inliers >= options_.min_inliers &&

@@ -135,12 +135,13 @@ class ObjectTracker : public ObjectBundleTerms {
                                     objects::ClusterInstanceEvidence* evidence) const;
   // Step 3, a cluster depth_m away (its predicted origin, camera z) beyond
   // flow_observations_min_depth_m with fewer keypoint matches than
-  // flow_observations_below_matches: its
+  // flow_observations_below_matches, without a canonical frame: its
   // unmatched points seen in the last frame at their flow-predicted pixels on its instance
   // (object_flow_observations.cpp).
   std::vector<FlowObservation> flow_observations(const objects::ObjectCluster& cluster,
                                                  const std::vector<Match>& matches,
-                                                 int instance, double depth_m) const;
+                                                 int instance, double depth_m,
+                                                 bool canonical) const;
   // Step 3's second pass: points not matched yet, projected with the estimated pose.
   void refine_matches(const objects::ObjectCluster& cluster, const Mat4& T_c_o,
                       const Frame& frame, int instance, std::vector<Match>* matches) const;

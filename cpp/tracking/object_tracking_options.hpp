@@ -53,8 +53,8 @@ struct ObjectTrackingOptions {
   int min_inliers = 6;              // inliers of the twist LM for a tracked frame
   // fewer keypoint matches than this: the flow-predicted pixels of the cluster's points seen
   // in the last frame join the twist LM as mono observations (0: off)
-  int flow_observations_below_matches = 0;
-  double flow_observations_min_depth_m = 0;  // ... when its origin lies at least this far (m)
+  int flow_observations_below_matches = 6;
+  double flow_observations_min_depth_m = 40;  // ... when its origin lies at least this far (m)
   double max_step_m = 5.0;          // object motion per frame beyond this is no motion (a fit gone wrong)
   int max_misses = 5;               // frames without a valid twist before the track ends
   int reseed_after_misses = 1;      // failed frames before new points replace a cluster's (0: never)

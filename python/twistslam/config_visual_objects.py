@@ -158,22 +158,25 @@ class VisualObjectsConfig:
     min_inliers: int = param(6, "inliers of the twist LM for a valid frame (3 fix a rigid "
                              "motion; 6 leave a margin against a wrong minimal fit)", "points")
     flow_observations_below_matches: int = param(
-        0, "a cluster with fewer keypoint matches than this also takes its unmatched points "
+        6, "a cluster with fewer keypoint matches than this also takes its unmatched points "
         "seen in the last frame at their flow-predicted pixels (on its instance, "
         "instance_border_px from its edge) as mono observations of the twist LM: a far car "
         "shows few repeatable keypoints (urban s12's turning car at 45-55 m: 20-30 keypoints "
-        "with depth in its mask, 3-7 matched, the LM short of min_inliers in 9 of 14 frames). "
-        "0 (off): 22 simulated sequences (urban 0-8 10-13, crowded 0-8), off -> 6 (with "
-        "flow_observations_min_depth_m 30): flow files 106 -> 106 of 107 cars, ghosts 1 -> 0, "
-        "aligned ATE 0.097 -> 0.107 m; DIS 106 -> 106, ghosts 2 -> 3 (urban s12's two gone, "
-        "three far oncoming cars at 35-45 m new), RPE_r 0.189 -> 0.174 deg/m. A mono "
-        "observation gives no depth motion: a far oncoming track still stalls. 10 at every "
-        "depth: 104 and 106 cars, ghosts 1 and 3", "matches", lo=0)
+        "with depth in its mask, 3-7 matched, the LM short of min_inliers in 9 of 14 frames, "
+        "a ghost). 6 (= min_inliers: only where the LM would fail) with "
+        "flow_observations_min_depth_m 40, on 22 simulated sequences (urban 0-8 10-13, crowded "
+        "0-8), off -> on: flow files 106 -> 106 of 107 cars, ghosts 1 -> 0, aligned ATE 0.097 "
+        "-> 0.108 m; DIS 106 -> 106, ghosts 2 -> 1, ATE 0.103 -> 0.102 m. 10 at every depth: "
+        "104 and 106 cars, ghosts 1 and 3. Not for tracks with a canonical (box) frame: the "
+        "boxes place them (det-reg rows identical; the classical row's urban s8 gained a ghost "
+        "on a cluster no box took); 0: off", "matches", lo=0)
     flow_observations_min_depth_m: float = param(
-        0.0, "flow_observations_below_matches applies only to clusters whose predicted origin "
-        "lies at least this far (camera z): at 15 m crowded s7's car 12 was lost with them "
-        "(its points slid along their rays in the windows); 30 m was measured", "m", lo=0.0,
-        hi=10000.0)
+        40.0, "flow_observations_below_matches applies only to clusters whose predicted origin "
+        "lies at least this far (camera z). A mono observation shows no motion along the line "
+        "of sight: with 30 m, far oncoming cars at 35-45 m stalled and three new DIS ghosts "
+        "took the place of urban s12's (ghosts 3 -> 3 over both flows; 40 m: 3 -> 1); at every "
+        "depth crowded s7's car 12 at 15 m was lost (its mono-only points slid along their "
+        "rays in the windows)", "m", lo=0.0, hi=10000.0)
     max_step_m: float = param(
         5.0, "an object pose moving farther than this in one frame is rejected: the twist LM "
         "then fails, and the window keeps its input poses. 5 m is 180 km/h at KITTI's 10 Hz. "

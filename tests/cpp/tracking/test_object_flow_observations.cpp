@@ -33,13 +33,14 @@ struct FlowObservations : TrackerScene {
 
 TEST_F(FlowObservations, AClusterWithoutRepeatableKeypointsIsTrackedByItsFlow) {
   tracking::ObjectTrackingOptions off;
-  ASSERT_EQ(off.flow_observations_below_matches, 0);
+  off.flow_observations_below_matches = 0;
   // the premise: no keypoint is found again, so every frame fails and re-seeds
   const objects::ObjectTrack reseeded = run(off);
   EXPECT_LE(reseeded.hits, 1);
 
   tracking::ObjectTrackingOptions on = off;
   on.flow_observations_below_matches = 10;
+  on.flow_observations_min_depth_m = 0.0;
   const objects::ObjectTrack tracked = run(on);
   ASSERT_EQ(tracked.frames.size(), static_cast<size_t>(kFrames));
   EXPECT_GE(tracked.hits, kFrames - 1);  // every frame after the first
@@ -59,6 +60,10 @@ TEST_F(FlowObservations, AClusterWithoutRepeatableKeypointsIsTrackedByItsFlow) {
   EXPECT_LE(run(far_only).hits, 1);
   far_only.flow_observations_min_depth_m = 25.0;
   EXPECT_GE(run(far_only).hits, kFrames - 1);
+  // the defaults: on for clusters beyond 40 m only, so this car at 30 m is not helped
+  const tracking::ObjectTrackingOptions defaults;
+  EXPECT_GT(defaults.flow_observations_below_matches, 0);
+  EXPECT_LE(run(defaults).hits, 1);
 }
 
 }  // namespace
