@@ -64,9 +64,9 @@ struct ScanSetup {
   float offset = 0;
 };
 
-ScanSetup scan_setup(const std::vector<cv::Mat>& pyramid_left, const geometry::StereoCamera& camera,
+ScanSetup scan_setup(const cv::Size& size0, const geometry::StereoCamera& camera,
                      const StereoSearchOptions& options) {
-  return {pyramid_left[0].size(), disparity_window(camera, options.min_depth, options.max_depth),
+  return {size0, disparity_window(camera, options.min_depth, options.max_depth),
           camera.fx * camera.baseline, static_cast<float>(camera.disparity_offset)};
 }
 
@@ -110,7 +110,7 @@ int search_stereo(const Keypoints& left, const std::vector<cv::Mat>& pyramid_lef
                   const StereoSearchOptions& options, const std::vector<int>& which,
                   StereoMatches* matches) {
   check_arguments("search_stereo", left, pyramid_left, pyramid_right, camera, options, which, *matches);
-  const ScanSetup setup = scan_setup(pyramid_left, camera, options);
+  const ScanSetup setup = scan_setup(pyramid_left[0].size(), camera, options);
   std::atomic<int> found{0};
   auto search_range = [&](const cv::Range& range) {
     for (int j = range.start; j < range.end; ++j) {
@@ -125,6 +125,21 @@ int search_stereo(const Keypoints& left, const std::vector<cv::Mat>& pyramid_lef
   return found.load();
 }
 
+bool search_pixel_stereo(const cv::Mat& left, const cv::Mat& right,
+                         const geometry::StereoCamera& camera, const StereoSearchOptions& options,
+                         float u, float v, const std::uint8_t* support, float* u_right,
+                         float* depth) {
+  check_options(options);
+  if (left.type() != CV_8UC1 || right.type() != CV_8UC1 || left.size() != right.size() || left.empty())
+    throw std::invalid_argument("search_pixel_stereo: left and right must be 8-bit gray of one size");
+  if (!(camera.baseline > 0) || !(camera.fx > 0))
+    throw std::invalid_argument("search_pixel_stereo: the camera needs fx > 0 and a positive baseline");
+  if (!std::isfinite(u) || !std::isfinite(v)) return false;
+  const ScanSetup setup = scan_setup(left.size(), camera, options);
+  const cv::KeyPoint at(cv::Point2f(u, v), 1.0f, -1.0f, 0.0f, /*octave=*/0);
+  return scan_depth(at, left, right, setup, options, support, u_right, depth);
+}
+
 InstanceSupportReport depth_on_instance_pixels(
     const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
     const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
@@ -137,7 +152,7 @@ InstanceSupportReport depth_on_instance_pixels(
                                 "level-0 image's size");
   if (!(min_support_fraction >= 0.0f && min_support_fraction <= 1.0f))
     throw std::invalid_argument("depth_on_instance_pixels: min_support_fraction must be in [0, 1]");
-  const ScanSetup setup = scan_setup(pyramid_left, camera, options);
+  const ScanSetup setup = scan_setup(pyramid_left[0].size(), camera, options);
   const int cols = 2 * options.patch_radius + 1, rows = 2 * options.patch_half_height + 1;
   std::atomic<int> rescanned{0}, dropped{0};
   auto range_body = [&](const cv::Range& range) {

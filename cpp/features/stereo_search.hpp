@@ -8,6 +8,7 @@
 // keypoints keep small objects tracked).
 #include <opencv2/core.hpp>
 
+#include <cstdint>
 #include <vector>
 
 #include "features/orb.hpp"
@@ -38,6 +39,16 @@ int search_stereo(const Keypoints& left, const std::vector<cv::Mat>& pyramid_lef
                   const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
                   const StereoSearchOptions& options, const std::vector<int>& which,
                   StereoMatches* matches);
+
+// The depth of one level-0 pixel that is no keypoint (a point located by the optical flow):
+// the scan of search_stereo on the level-0 images left / right (CV_8UC1, one size) at (u, v),
+// on the window pixels `support` marks (row-major (2 patch_half_height + 1) x
+// (2 patch_radius + 1), 1 = used; nullptr: all). Returns false (outputs untouched) when the
+// scan is rejected or the window leaves the image. Throws std::invalid_argument on bad images.
+bool search_pixel_stereo(const cv::Mat& left, const cv::Mat& right,
+                         const geometry::StereoCamera& camera, const StereoSearchOptions& options,
+                         float u, float v, const std::uint8_t* support, float* u_right,
+                         float* depth);
 
 // What depth_on_instance_pixels did.
 struct InstanceSupportReport {

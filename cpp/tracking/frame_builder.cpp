@@ -59,6 +59,8 @@ FrameBuildReport FrameBuilder::build(int index, double timestamp, const cv::Mat&
   FrameBuildReport out;
   const cv::Mat gray_left = features::to_gray(left, /*rgb=*/true),
                 gray_right = features::to_gray(right, /*rgb=*/true);
+  out.gray_left = gray_left;
+  out.gray_right = gray_right;
   // Left and right pyramids are extracted on both cores, then matched along the rows.
   features::StereoFeatures stereo_features =
       features::extract_and_match(extractor_, gray_left, gray_right, camera_, stereo_options_);

@@ -21,6 +21,7 @@ struct FrameBuildReport {
   int num_lidar_depth = 0;  // keypoints that took their depth from the scan
   ObjectKeypointReport object_keypoints;  // extra keypoints inside object masks
   std::vector<std::pair<std::string, double>> timings_ms;  // features, stereo[, lidar_depth]
+  cv::Mat gray_left, gray_right;  // the 8-bit pair the keypoints came from (may share the input)
 };
 
 class FrameBuilder {

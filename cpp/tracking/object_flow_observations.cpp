@@ -10,9 +10,14 @@
 // observation shows no motion along the line of sight, and nearer, where keypoints are
 // plenty, far oncoming tracks at 35-45 m stalled on them. Not for a track with a canonical
 // (box) frame: its boxes place it, and the classical row's urban s8 gained a ghost with them.
+// With the stereo pair (flow_observations_stereo), each such pixel is also scanned along the
+// right image's row on its instance's pixels of the SAD window (features::search_pixel_stereo):
+// a disparity makes it a stereo observation, which sees the motion along the line of sight
+// that a mono one misses (far oncoming cars stalled on mono observations).
 // docs/visual_objects.md has the figures.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "tracking/instance_pixels.hpp"
 #include "tracking/object_tracker.hpp"
@@ -30,6 +35,24 @@ bool inside_instance(const cv::Mat& instances, const Vec2& uv, int instance, dou
   return true;
 }
 
+// The SAD window's pixels at uv (row-major, half sizes of `search`) on `instance`; returns how
+// many.
+int instance_support(const cv::Mat& instances, const Vec2& uv, int instance,
+                     const features::StereoSearchOptions& search, std::vector<std::uint8_t>* support) {
+  const int cols = 2 * search.patch_radius + 1, rows = 2 * search.patch_half_height + 1;
+  const int x = static_cast<int>(std::lround(uv.x())), y = static_cast<int>(std::lround(uv.y()));
+  support->assign(static_cast<size_t>(rows) * cols, 0);
+  int count = 0;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      const bool own = pixel_value(instances, Vec2(x - search.patch_radius + c,
+                                                   y - search.patch_half_height + r)) == instance;
+      (*support)[static_cast<size_t>(r) * cols + c] = own;
+      count += own;
+    }
+  return count;
+}
+
 }  // namespace
 
 std::vector<ObjectTracker::FlowObservation> ObjectTracker::flow_observations(
@@ -37,9 +60,11 @@ std::vector<ObjectTracker::FlowObservation> ObjectTracker::flow_observations(
     double depth_m, bool canonical) const {
   std::vector<FlowObservation> out;
   const int below = options_.flow_observations_below_matches;
-  if (below <= 0 || canonical || static_cast<int>(matches.size()) >= below || instance <= 0 || flow_.empty() ||
-      instances_.empty() || depth_m < options_.flow_observations_min_depth_m)
+  if (below <= 0 || canonical || static_cast<int>(matches.size()) >= below || instance <= 0 ||
+      flow_.empty() || instances_.empty() || depth_m < options_.flow_observations_min_depth_m)
     return out;
+  const bool stereo = options_.flow_observations_stereo && !gray_left_.empty();
+  std::vector<std::uint8_t> support;
   std::vector<std::uint8_t> matched(cluster.points.size(), 0);
   for (const Match& m : matches) matched[m.point] = 1;
   for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) {
@@ -48,7 +73,21 @@ std::vector<ObjectTracker::FlowObservation> ObjectTracker::flow_observations(
     Vec2 uv;
     if (!flow_at(flow_, p.last.uv, &uv)) continue;
     if (!inside_instance(instances_, uv, instance, instance_border_px_)) continue;
-    out.push_back({i, uv});
+    FlowObservation o{i, uv};
+    if (stereo) {
+      // on the instance's pixels only (at least instance_pixel_min_fraction of the window):
+      // at a far car's silhouette the window also covers the background
+      const int count = instance_support(instances_, uv, instance, search_, &support);
+      float u_right = -1, depth = -1;
+      if (count >= options_.instance_pixel_min_fraction * static_cast<double>(support.size()) &&
+          features::search_pixel_stereo(gray_left_, gray_right_, camera_, search_,
+                                        static_cast<float>(uv.x()), static_cast<float>(uv.y()),
+                                        count == static_cast<int>(support.size()) ? nullptr
+                                                                                 : support.data(),
+                                        &u_right, &depth))
+        o.u_right = u_right;
+    }
+    out.push_back(o);
   }
   return out;
 }

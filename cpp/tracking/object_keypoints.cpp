@@ -135,6 +135,16 @@ cv::Mat instances_of_classes(const cv::Mat& instances, const cv::Mat& labels,
   return out;
 }
 
+features::StereoSearchOptions object_stereo_search(const ObjectTrackingOptions& options) {
+  features::StereoSearchOptions search;
+  search.min_depth = static_cast<float>(options.extra_min_depth_m);
+  search.max_depth = static_cast<float>(options.max_depth_m);
+  search.max_cost = static_cast<float>(options.extra_max_sad_cost);
+  search.uniqueness = static_cast<float>(options.extra_sad_uniqueness);
+  features::check_options(search);
+  return search;
+}
+
 ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& main,
                                                  const ObjectTrackingOptions& options)
     : extractor_(mask_orb_options(main, options)),
@@ -145,11 +155,7 @@ ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& mai
       left_right_tolerance_px_(static_cast<float>(options.left_right_tolerance_px)),
       instance_pixel_stereo_(options.instance_pixel_stereo),
       instance_pixel_min_fraction_(static_cast<float>(options.instance_pixel_min_fraction)) {
-  search_.min_depth = static_cast<float>(options.extra_min_depth_m);
-  search_.max_depth = static_cast<float>(options.max_depth_m);
-  search_.max_cost = static_cast<float>(options.extra_max_sad_cost);
-  search_.uniqueness = static_cast<float>(options.extra_sad_uniqueness);
-  features::check_options(search_);
+  search_ = object_stereo_search(options);
 }
 
 ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,

@@ -36,6 +36,10 @@ cv::Mat object_class_mask(const cv::Mat& instances, const cv::Mat& labels,
 cv::Mat instances_of_classes(const cv::Mat& instances, const cv::Mat& labels,
                              const std::vector<int>& class_ids);
 
+// The SAD scan's options for object pixels (extra keypoints, flow-located points): the object
+// depth range and the extra keypoints' cost and uniqueness bounds.
+features::StereoSearchOptions object_stereo_search(const ObjectTrackingOptions& options);
+
 class ObjectKeypointExtractor {
  public:
   // main: the frame's ORB options (scale factor and levels are shared, so octaves agree).

@@ -12,6 +12,7 @@
 #include "objects/instance_association.hpp"
 #include "objects/motion_model.hpp"
 #include "tracking/instance_pixels.hpp"
+#include "tracking/object_keypoints.hpp"
 #include "tracking/object_point_helpers.hpp"
 
 namespace twistslam::tracking {
@@ -32,7 +33,8 @@ ObjectTracker::ObjectTracker(const geometry::StereoCamera& camera,
                              const std::vector<float>& scale_factors, LevelWeights weights,
                              const ObjectLidarOptions& lidar_options)
     : camera_(camera), options_(options), lidar_options_(lidar_options),
-      scale_factors_(scale_factors), weights_(std::move(weights)) {
+      scale_factors_(scale_factors), weights_(std::move(weights)),
+      search_(object_stereo_search(options)) {
   lm_options_.max_iterations = options.lm_iterations;
   lm_options_.min_inliers = options.min_inliers;
 }
@@ -173,6 +175,7 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
       objects::TwistObservation o;
       o.X_o = cluster.points[f.point].X_o;
       o.uv = f.uv;
+      o.u_right = f.u_right;
       o.inv_sigma2 = weights_.at(cluster.points[f.point].last.octave);
       obs.push_back(o);
     }
@@ -275,7 +278,8 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     for (size_t j = 0; j < estimated_flow.size(); ++j) {
       if (!est.inlier[estimated_matches + j]) continue;
       objects::ObjectPoint& p = cluster.points[estimated_flow[j].point];
-      observe(p, {frame.index, estimated_flow[j].uv, -1.0, p.last.octave}, options_.window_frames,
+      observe(p, {frame.index, estimated_flow[j].uv, estimated_flow[j].u_right, p.last.octave},
+              options_.window_frames,
               options_.final_smoothing);
       ++p.found;
     }
@@ -300,7 +304,8 @@ ObjectTrackingReport ObjectTracker::track(const Frame& input_frame, const cv::Ma
                                           const cv::Mat& flow, const Vec3& up_w,
                                           const cv::Mat& labels, const Vec4& road_plane_w,
                                           const std::vector<objects::Detection>& detections,
-                                          const Points3* scan) {
+                                          const Points3* scan, const cv::Mat& gray_left,
+                                          const cv::Mat& gray_right) {
   ObjectTrackingReport report;
   if (!options_.enabled) return report;
   if (!instances.empty() && (instances.type() != CV_32SC1 || instances.cols != camera_.width ||
@@ -323,6 +328,13 @@ ObjectTrackingReport ObjectTracker::track(const Frame& input_frame, const cv::Ma
   instances_ = instances;
   labels_ = labels;
   flow_ = flow;
+  const bool pair = !gray_left.empty() && !gray_right.empty();
+  if (pair && (gray_left.type() != CV_8UC1 || gray_right.type() != CV_8UC1 ||
+               gray_left.cols != camera_.width || gray_left.rows != camera_.height ||
+               gray_right.size() != gray_left.size()))
+    throw std::invalid_argument("gray_left / gray_right: expected 8-bit gray images of the image size");
+  gray_left_ = pair ? gray_left : cv::Mat();
+  gray_right_ = pair ? gray_right : cv::Mat();
   road_plane_w_ = road_plane_w;
   while (static_cast<int>(T_c_w_of_frame_.size()) > std::max(options_.window_frames, 2) + 1)
     T_c_w_of_frame_.erase(T_c_w_of_frame_.begin());

@@ -27,6 +27,7 @@
 #include <utility>
 #include <vector>
 
+#include "features/stereo_search.hpp"
 #include "geometry/stereo_camera.hpp"
 #include "lidar/scan_projection.hpp"
 #include "objects/box_free_space.hpp"
@@ -83,11 +84,14 @@ class ObjectTracker : public ObjectBundleTerms {
   // detections: the frame's 3D boxes (camera frame; class_id in the panoptic vocabulary).
   // scan: the frame's LiDAR points (frame c) or nullptr; object scans inside canonical boxes
   // are registered frame to frame by GICP (e_reg, object_scans.cpp).
+  // gray_left / gray_right: empty or the frame's rectified 8-bit pair (CV_8UC1, image size):
+  // the flow-located points' disparity (flow_observations_stereo).
   ObjectTrackingReport track(const Frame& frame, const cv::Mat& instances, const cv::Mat& flow,
                              const Vec3& up_w, const cv::Mat& labels = cv::Mat(),
                              const Vec4& road_plane_w = Vec4::Zero(),
                              const std::vector<objects::Detection>& detections = {},
-                             const Points3* scan = nullptr);
+                             const Points3* scan = nullptr, const cv::Mat& gray_left = cv::Mat(),
+                             const cv::Mat& gray_right = cv::Mat());
 
   // The frame just tracked becomes a keyframe: its object observations are kept for the
   // local BA (e_dyna), the latest max_keyframes per point.
@@ -122,10 +126,11 @@ class ObjectTracker : public ObjectBundleTerms {
     int keypoint;
     int distance;  // Hamming bits
   };
-  // a point located by the optical flow alone (no keypoint there): a mono observation
+  // a point located by the optical flow alone (no keypoint there)
   struct FlowObservation {
     int point;
-    Vec2 uv;  // px, flow-predicted pixel in the current left image
+    Vec2 uv;             // px, flow-predicted pixel in the current left image
+    double u_right = -1;  // px, its SAD scan's right column; < 0: none (mono observation)
   };
   // Step 1: the cluster's points searched in the frame from their last observation (flow)
   // or the predicted pose; fills the association evidence.
@@ -136,8 +141,8 @@ class ObjectTracker : public ObjectBundleTerms {
   // Step 3, a cluster depth_m away (its predicted origin, camera z) beyond
   // flow_observations_min_depth_m with fewer keypoint matches than
   // flow_observations_below_matches, without a canonical frame: its
-  // unmatched points seen in the last frame at their flow-predicted pixels on its instance
-  // (object_flow_observations.cpp).
+  // unmatched points seen in the last frame at their flow-predicted pixels on its instance,
+  // with a SAD scan's disparity where it finds one (object_flow_observations.cpp).
   std::vector<FlowObservation> flow_observations(const objects::ObjectCluster& cluster,
                                                  const std::vector<Match>& matches,
                                                  int instance, double depth_m,
@@ -338,6 +343,8 @@ class ObjectTracker : public ObjectBundleTerms {
   std::map<int, Mat4> T_c_w_of_frame_;  // camera poses of the recent frames (window)
   Vec3 up_w_ = Vec3(0, -1, 0);          // the road normal of the frame being tracked
   cv::Mat instances_, labels_, flow_;   // during track(): the caller's images (views)
+  cv::Mat gray_left_, gray_right_;      // during track(): the stereo pair (views; may be empty)
+  features::StereoSearchOptions search_;  // the flow-located points' SAD scan
   double instance_border_px_ = 0;       // during track(): the keypoints' instance border rule
   Vec4 road_plane_w_ = Vec4::Zero();    // its road plane (zero: none)
   std::vector<objects::Detection> detections_;  // during track(): the frame's boxes (frame c)

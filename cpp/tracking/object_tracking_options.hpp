@@ -55,6 +55,10 @@ struct ObjectTrackingOptions {
   // in the last frame join the twist LM as mono observations (0: off)
   int flow_observations_below_matches = 6;
   double flow_observations_min_depth_m = 40;  // ... when its origin lies at least this far (m)
+  // ... each with the depth of a SAD scan at its pixel on its instance's pixels, when the scan
+  // finds one (a stereo observation: it sees motion along the line of sight; else mono). Off:
+  // on 22 simulated sequences it added ghosts (1 -> 4 over both flows, config_visual_objects.py)
+  bool flow_observations_stereo = false;
   double max_step_m = 5.0;          // object motion per frame beyond this is no motion (a fit gone wrong)
   int max_misses = 5;               // frames without a valid twist before the track ends
   int reseed_after_misses = 1;      // failed frames before new points replace a cluster's (0: never)
@@ -160,6 +164,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("min_inliers", o.min_inliers, 3, 100000);  // 3 points fix a rigid motion
   visit("flow_observations_below_matches", o.flow_observations_below_matches, 0, 100000);
   visit("flow_observations_min_depth_m", o.flow_observations_min_depth_m, 0.0, 10000.0);
+  visit("flow_observations_stereo", o.flow_observations_stereo, 0, 1);
   visit("max_step_m", o.max_step_m, 0.01, 1000.0);
   visit("max_misses", o.max_misses, 0, 100000);
   visit("reseed_after_misses", o.reseed_after_misses, 0, 100000);

@@ -137,7 +137,8 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
   if (track_objects) {
     result.objects = object_tracker_.track(frame, instances, flow, road_up_w_, labels,
                                            road_plane_.plane(), detections,
-                                           points_c.rows() > 0 ? &points_c : nullptr);
+                                           points_c.rows() > 0 ? &points_c : nullptr,
+                                           built.gray_left, built.gray_right);
     if (result.is_keyframe) object_tracker_.mark_keyframe(frame.index, options_.local_ba.window);
     timer.lap("objects");
   }

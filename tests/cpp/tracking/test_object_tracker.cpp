@@ -453,6 +453,18 @@ TEST_F(TrackerScene, BadInstanceOrFlowImagesThrow) {
   const cv::Mat flow_small = cv::Mat::zeros(10, 10, CV_32FC2);
   EXPECT_THROW(tracker.track(frame, f.instances, flow_wrong_type, kUp), std::invalid_argument);
   EXPECT_THROW(tracker.track(frame, f.instances, flow_small, kUp), std::invalid_argument);
+  // the stereo pair (flow observations' disparity): 8-bit gray of the image size, or none
+  const cv::Mat gray = cv::Mat::zeros(kCamera.height, kCamera.width, CV_8UC1);
+  const cv::Mat colour = cv::Mat::zeros(kCamera.height, kCamera.width, CV_8UC3);
+  const cv::Mat gray_small = cv::Mat::zeros(kCamera.height / 2, kCamera.width / 2, CV_8UC1);
+  const auto with_pair = [&](const cv::Mat& left, const cv::Mat& right) {
+    tracker.track(frame, f.instances, f.flow, kUp, cv::Mat(), Vec4::Zero(), {}, nullptr, left, right);
+  };
+  EXPECT_THROW(with_pair(colour, gray), std::invalid_argument);
+  EXPECT_THROW(with_pair(gray, gray_small), std::invalid_argument);
+  EXPECT_THROW(with_pair(gray_small, gray_small), std::invalid_argument);
+  EXPECT_NO_THROW(with_pair(gray, gray));
+  EXPECT_NO_THROW(with_pair(gray, cv::Mat()));  // half a pair: none
   // the correct types and sizes are accepted
   EXPECT_NO_THROW(tracker.track(frame, f.instances, f.flow, kUp));
   EXPECT_TRUE(tracker.tracks().empty());
