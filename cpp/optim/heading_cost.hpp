@@ -59,4 +59,53 @@ inline ceres::CostFunction* make_heading_cost(const Vec3& axis_o, const Vec3& up
       new HeadingResidual(axis_o.normalized(), up_w.normalized(), d_w, 1.0 / sigma_m));
 }
 
+// The same rule without a known travel axis (a track born in a turn, or not straight long
+// enough to have one): the object-frame directions of two consecutive displacements agree.
+// Each step's direction is taken in the mean rotation of its two frames (a turn's chord
+// points along the heading of its middle), d1_w, d2_w are data as above, and
+//   u_k = R_mid(k)^T d_k_w,   e = ((u_1 / |u_1|) x u_2) . up_o / sigma,   up_o = R_b^T up_w
+// in metres per frame: the second step's motion across the first one's direction. A yaw that
+// turns faster or slower than the path it moves along pays; the path itself is fixed data.
+struct AxisFreeHeadingResidual {
+  AxisFreeHeadingResidual(const Vec3& up_w, const Vec3& d1_w, const Vec3& d2_w, double weight)
+      : up_w(up_w), d1_w(d1_w), d2_w(d2_w), weight(weight) {}
+
+  template <typename T>
+  static Eigen::Quaternion<T> mean_rotation(const Eigen::Quaternion<T>& a, Eigen::Quaternion<T> b) {
+    if (a.dot(b) < T(0)) b.coeffs() = -b.coeffs();  // the same hemisphere
+    return Eigen::Quaternion<T>(a.coeffs() + b.coeffs()).normalized();
+  }
+
+  template <typename T>
+  bool operator()(const T* a, const T* b, const T* c, T* residual) const {
+    using V3 = Eigen::Matrix<T, 3, 1>;
+    const Eigen::Quaternion<T> qa = Eigen::Map<const Eigen::Quaternion<T>>(a + 3).normalized();
+    const Eigen::Quaternion<T> qb = Eigen::Map<const Eigen::Quaternion<T>>(b + 3).normalized();
+    const Eigen::Quaternion<T> qc = Eigen::Map<const Eigen::Quaternion<T>>(c + 3).normalized();
+    const V3 u1 = mean_rotation(qa, qb).conjugate() * d1_w.cast<T>();
+    const V3 u2 = mean_rotation(qb, qc).conjugate() * d2_w.cast<T>();
+    const V3 up_o = qb.conjugate() * up_w.cast<T>();
+    const T norm = u1.norm();
+    if (!(norm > T(1e-9))) return false;
+    residual[0] = T(weight) * (u1 / norm).cross(u2).dot(up_o);
+    return true;
+  }
+
+  Vec3 up_w, d1_w, d2_w;
+  double weight;
+};
+
+// up_w is normalised here; throws std::invalid_argument for a sigma <= 0, a zero normal or a
+// zero or non-finite displacement.
+inline ceres::CostFunction* make_axis_free_heading_cost(const Vec3& up_w, const Vec3& d1_w,
+                                                        const Vec3& d2_w, double sigma_m) {
+  if (!(sigma_m > 0) || !std::isfinite(sigma_m) || !up_w.allFinite() || !(up_w.norm() > 0) ||
+      !d1_w.allFinite() || !d2_w.allFinite() || !(d1_w.norm() > 0))
+    throw std::invalid_argument(
+        "axis-free heading cost: sigma must be finite and > 0, the normal and the first step "
+        "non-zero");
+  return new ceres::AutoDiffCostFunction<AxisFreeHeadingResidual, 1, 7, 7, 7>(
+      new AxisFreeHeadingResidual(up_w.normalized(), d1_w, d2_w, 1.0 / sigma_m));
+}
+
 }  // namespace twistslam::optim::detail

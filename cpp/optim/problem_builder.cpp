@@ -152,6 +152,15 @@ ceres::ResidualBlockId ProblemBuilder::add_heading(int pose_a, int pose_b, const
                                     blocks_[pose_b].data);
 }
 
+ceres::ResidualBlockId ProblemBuilder::add_axis_free_heading(int pose_a, int pose_b, int pose_c,
+                                                             const Vec3& up_w, const Vec3& d1_w,
+                                                             const Vec3& d2_w, double sigma_m,
+                                                             double huber_delta) {
+  return problem_->AddResidualBlock(make_axis_free_heading_cost(up_w, d1_w, d2_w, sigma_m),
+                                    huber(huber_delta), blocks_[pose_a].data,
+                                    blocks_[pose_b].data, blocks_[pose_c].data);
+}
+
 ceres::ResidualBlockId ProblemBuilder::add_dynamic_reprojection(
     int camera_pose, int object_pose, int object_point, const geometry::StereoCamera& cam,
     const Vec2& uv, double u_right, double inv_sigma2, double huber_delta, double min_depth) {

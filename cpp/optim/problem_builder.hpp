@@ -119,6 +119,13 @@ class ProblemBuilder {
   ceres::ResidualBlockId add_heading(int pose_a, int pose_b, const Vec3& axis_o,
                                      const Vec3& up_w, const Vec3& d_w, double sigma_m,
                                      double huber_delta);
+  // The same without a known axis, on three consecutive object pose blocks: the measured
+  // displacements d1_w (a -> b) and d2_w (b -> c) point the same way in the object frame
+  // (heading_cost.hpp). sigma_m in metres per frame, huber_delta in sigmas.
+  ceres::ResidualBlockId add_axis_free_heading(int pose_a, int pose_b, int pose_c,
+                                               const Vec3& up_w, const Vec3& d1_w,
+                                               const Vec3& d2_w, double sigma_m,
+                                               double huber_delta);
 
   // e_dyna (dynamic_reprojection_cost.hpp): stereo (u_right >= 0) or mono reprojection of
   // the object-frame point block `object_point` (X_o) through the object pose block

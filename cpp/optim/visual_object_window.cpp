@@ -69,6 +69,8 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
                                obs.inv_sigma2 / (sigma_scale * sigma_scale), huber, o.min_depth);
   }
   const bool use_heading = o.use_heading && w.travel_axis_o.norm() > 0.5;  // a unit axis or zero
+  const bool axis_free = o.use_heading && !use_heading && w.wheeled &&
+                         o.axis_free_heading_min_step_m > 0 && w.up_w.norm() > 0.5;
   for (int i = 0; i + 1 < n; ++i) {
     const bool both_fixed = i + 1 < w.num_fixed_frames;
     if (o.use_link && !both_fixed)
@@ -78,6 +80,13 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
       b.add_heading(object_block[i], object_block[i + 1], w.travel_axis_o, w.up_w,
                     w.T_w_o[i + 1].topRightCorner<3, 1>() - w.T_w_o[i].topRightCorner<3, 1>(),
                     o.lateral_sigma, o.huber_heading);
+    const Vec3 step = w.T_w_o[i + 1].topRightCorner<3, 1>() - w.T_w_o[i].topRightCorner<3, 1>();
+    if (axis_free && i >= 1 && i + 1 >= w.num_fixed_frames) {
+      const Vec3 before = w.T_w_o[i].topRightCorner<3, 1>() - w.T_w_o[i - 1].topRightCorner<3, 1>();
+      if (before.norm() >= o.axis_free_heading_min_step_m && step.norm() >= o.axis_free_heading_min_step_m)
+        b.add_axis_free_heading(object_block[i - 1], object_block[i], object_block[i + 1], w.up_w,
+                                before, step, o.lateral_sigma, o.huber_heading);
+    }
     if (o.use_const && i >= 1 && i + 1 >= w.num_fixed_frames)
       b.add_constant_velocity(object_block[i - 1], object_block[i], object_block[i + 1], Pi,
                               o.const_sigma_translation, const_rotation_sigma(w, i, o),

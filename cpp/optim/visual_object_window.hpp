@@ -40,6 +40,7 @@ struct VisualObjectWindow {
   // e_head: the travel axis in the object frame (zero: unknown, no term) and the road normal
   Vec3 travel_axis_o = Vec3::Zero();
   Vec3 up_w = Vec3(0, -1, 0);
+  bool wheeled = false;  // a vehicle on the road: the axis-free e_head may apply (no axis yet)
   // LiDAR terms, one entry per frame or none: the associated detection's box pose T_w_det
   // (has_detection), and the motion M_w = T_w_o(i+1) T_w_o(i)^-1 registration measured
   // from frame i to i + 1 (has_registration[i]; the last entry is unused)
@@ -98,6 +99,9 @@ struct VisualObjectWindowOptions {
   bool use_const = true;
   bool use_link = true;
   bool use_heading = true;               // e_head where the window has a travel axis
+  // > 0: where it has none, the axis-free e_head on each triple of consecutive poses whose
+  // two steps (from the initial positions) are at least this long (m/frame); 0: off
+  double axis_free_heading_min_step_m = 0;
   bool refine_points = true;
   int max_iterations = 5;
   // Ceres stops once an iteration changes the cost by less than this fraction of it

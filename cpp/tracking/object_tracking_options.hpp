@@ -104,6 +104,9 @@ struct ObjectTrackingOptions {
   // non-holonomic prior in the window (optim/heading_cost.hpp), planar-link classes
   bool nonholonomic = true;
   double lateral_sigma_m = 0.02;     // m/frame across the travel axis
+  // > 0: a vehicle without a travel axis yet gets the axis-free e_head (consecutive steps point
+  // the same way in the object frame) where both steps are at least this long (m/frame); 0: off
+  double axis_free_heading_min_step_m = 0;
   double travel_min_path_m = 3.0;    // m travelled before the travel axis is trusted
   double travel_min_anisotropy = 10; // largest / second eigenvalue of the step moments
   double travel_min_straightness = 0.5;  // net displacement / path before the axis is trusted
@@ -196,6 +199,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("smoothing_max_median_move_m", o.smoothing_max_median_move_m, 0.0, 1000.0);
   visit("nonholonomic", o.nonholonomic, 0, 1);
   visit("lateral_sigma_m", o.lateral_sigma_m, 1e-4, 100.0);
+  visit("axis_free_heading_min_step_m", o.axis_free_heading_min_step_m, 0.0, 100.0);
   visit("travel_min_path_m", o.travel_min_path_m, 0.0, 10000.0);
   visit("travel_min_anisotropy", o.travel_min_anisotropy, 1.0, 1e6);
   visit("travel_min_straightness", o.travel_min_straightness, 0.0, 1.0);

@@ -87,6 +87,7 @@ optim::VisualObjectWindowOptions ObjectTracker::window_options(const objects::Ob
   wo.huber_reg = lidar_options_.huber_reg;
   wo.use_heading = options_.nonholonomic;
   wo.lateral_sigma = options_.lateral_sigma_m;
+  wo.axis_free_heading_min_step_m = options_.axis_free_heading_min_step_m;
   wo.use_const = options_.use_const;
   wo.const_sigma_translation = options_.const_sigma_translation;
   wo.const_sigma_rotation = options_.const_sigma_rotation;
@@ -158,6 +159,7 @@ bool ObjectTracker::build_window(int c, int first, int rows, const std::map<int,
     w->travel_axis_o = track.travel.axis(options_.travel_min_path_m, options_.travel_min_anisotropy,
                                          options_.travel_min_straightness);
     w->up_w = up_w_;
+    w->wheeled = true;
   }
   // LiDAR terms: the boxes of the window's frames (e_det; the pose prior only where the
   // object frame is the box frame) and the registered motions (e_reg)

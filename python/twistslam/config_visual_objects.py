@@ -332,6 +332,13 @@ class VisualObjectsConfig:
         0.02, "step across the travel axis allowed per frame (an origin off the rear axle in "
         "a turn is in the Huber tail). Urban seeds 0-2 RPE_r: 0.59/0.23/0.36 deg/m at 0.02, "
         "0.55/0.37/0.38 at 0.05, 0.56/0.59/0.45 at 0.1; crowded unchanged", "m/frame")
+    axis_free_heading_min_step_m: float = param(
+        0.0, "> 0: a vehicle without a travel axis yet (born in a turn, or not straight long "
+        "enough) gets the axis-free e_head in the window: two consecutive steps, both at least "
+        "this long per frame, point the same way in the object frame (sigma lateral_sigma_m), "
+        "so that the yaw turns with the path the positions observe. Urban s15's car 14, "
+        "turning at 45-18 m, had its yaw turned twice as fast as the car by e_const "
+        "(docs/visual_objects.md, 'Unseen seeds'); 0: off", "m/frame", lo=0.0, hi=100.0)
     travel_min_path_m: float = param(
         3.0, "distance the track must have travelled before its travel axis is used (urban "
         "RPE_r 0.59/0.24/0.36 deg/m at 1.5 m, 0.59/0.23/0.36 at 3, 0.57/0.34/0.40 at 6)", "m")
