@@ -32,6 +32,33 @@ double detection_range_scale(const VisualObjectWindow& w, int i, const VisualObj
   return std::max(1.0, centre_c.norm() / o.det_sigma_reference_range_m);
 }
 
+// The axis-free e_head's poses around window row i: a before and c after it, each chord the
+// fewest frames long that reaches axis_free_heading_min_chord_m (one frame when it is 0), both
+// moving at least axis_free_heading_min_step_m per frame on average; unusable at the window's
+// ends, short of either, or where every pose of the triple is fixed
+struct AxisFreeTriple {
+  bool usable = false;
+  int a = 0, c = 0;
+  Vec3 before = Vec3::Zero(), after = Vec3::Zero();
+};
+
+AxisFreeTriple axis_free_triple(const VisualObjectWindow& w, int i, const VisualObjectWindowOptions& o) {
+  const int n = static_cast<int>(w.T_w_o.size());
+  const auto position = [&w](int k) -> Vec3 { return w.T_w_o[k].topRightCorner<3, 1>(); };
+  const double chord = o.axis_free_heading_min_chord_m;
+  AxisFreeTriple t;
+  t.a = i - 1;
+  while (t.a > 0 && (position(i) - position(t.a)).norm() < chord) --t.a;
+  t.c = i + 1;
+  while (t.c + 1 < n && (position(t.c) - position(i)).norm() < chord) ++t.c;
+  if (t.c < w.num_fixed_frames) return t;
+  t.before = position(i) - position(t.a);
+  t.after = position(t.c) - position(i);
+  t.usable = t.before.norm() >= std::max(chord, o.axis_free_heading_min_step_m * (i - t.a)) &&
+             t.after.norm() >= std::max(chord, o.axis_free_heading_min_step_m * (t.c - i));
+  return t;
+}
+
 }  // namespace
 
 VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCamera& camera,
@@ -80,12 +107,11 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
       b.add_heading(object_block[i], object_block[i + 1], w.travel_axis_o, w.up_w,
                     w.T_w_o[i + 1].topRightCorner<3, 1>() - w.T_w_o[i].topRightCorner<3, 1>(),
                     o.lateral_sigma, o.huber_heading);
-    const Vec3 step = w.T_w_o[i + 1].topRightCorner<3, 1>() - w.T_w_o[i].topRightCorner<3, 1>();
-    if (axis_free && i >= 1 && i + 1 >= w.num_fixed_frames) {
-      const Vec3 before = w.T_w_o[i].topRightCorner<3, 1>() - w.T_w_o[i - 1].topRightCorner<3, 1>();
-      if (before.norm() >= o.axis_free_heading_min_step_m && step.norm() >= o.axis_free_heading_min_step_m)
-        b.add_axis_free_heading(object_block[i - 1], object_block[i], object_block[i + 1], w.up_w,
-                                before, step, o.lateral_sigma, o.huber_heading);
+    if (axis_free && i >= 1) {
+      const AxisFreeTriple t = axis_free_triple(w, i, o);
+      if (t.usable)
+        b.add_axis_free_heading(object_block[t.a], object_block[i], object_block[t.c], w.up_w,
+                                t.before, t.after, o.lateral_sigma, o.huber_heading);
     }
     if (o.use_const && i >= 1 && i + 1 >= w.num_fixed_frames)
       b.add_constant_velocity(object_block[i - 1], object_block[i], object_block[i + 1], Pi,

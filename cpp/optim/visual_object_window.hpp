@@ -102,6 +102,10 @@ struct VisualObjectWindowOptions {
   // > 0: where it has none, the axis-free e_head on each triple of consecutive poses whose
   // two steps (from the initial positions) are at least this long (m/frame); 0: off
   double axis_free_heading_min_step_m = 0;
+  // > 0: each of its two displacements spans as many frames as it takes to be at least this
+  // long (m), so that the direction of a chord is long against the positions' noise (the
+  // residual's noise is the positions', its yaw signal grows with the chord); 0: one frame
+  double axis_free_heading_min_chord_m = 0;
   bool refine_points = true;
   int max_iterations = 5;
   // Ceres stops once an iteration changes the cost by less than this fraction of it

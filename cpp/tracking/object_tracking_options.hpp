@@ -107,6 +107,8 @@ struct ObjectTrackingOptions {
   // > 0: a vehicle without a travel axis yet gets the axis-free e_head (consecutive steps point
   // the same way in the object frame) where both steps are at least this long (m/frame); 0: off
   double axis_free_heading_min_step_m = 0;
+  // > 0: its two displacements each span the fewest frames that make them this long (m)
+  double axis_free_heading_min_chord_m = 0;
   double travel_min_path_m = 3.0;    // m travelled before the travel axis is trusted
   double travel_min_anisotropy = 10; // largest / second eigenvalue of the step moments
   double travel_min_straightness = 0.5;  // net displacement / path before the axis is trusted
@@ -200,6 +202,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("nonholonomic", o.nonholonomic, 0, 1);
   visit("lateral_sigma_m", o.lateral_sigma_m, 1e-4, 100.0);
   visit("axis_free_heading_min_step_m", o.axis_free_heading_min_step_m, 0.0, 100.0);
+  visit("axis_free_heading_min_chord_m", o.axis_free_heading_min_chord_m, 0.0, 1000.0);
   visit("travel_min_path_m", o.travel_min_path_m, 0.0, 10000.0);
   visit("travel_min_anisotropy", o.travel_min_anisotropy, 1.0, 1e6);
   visit("travel_min_straightness", o.travel_min_straightness, 0.0, 1.0);

@@ -88,6 +88,7 @@ optim::VisualObjectWindowOptions ObjectTracker::window_options(const objects::Ob
   wo.use_heading = options_.nonholonomic;
   wo.lateral_sigma = options_.lateral_sigma_m;
   wo.axis_free_heading_min_step_m = options_.axis_free_heading_min_step_m;
+  wo.axis_free_heading_min_chord_m = options_.axis_free_heading_min_chord_m;
   wo.use_const = options_.use_const;
   wo.const_sigma_translation = options_.const_sigma_translation;
   wo.const_sigma_rotation = options_.const_sigma_rotation;

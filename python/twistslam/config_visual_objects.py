@@ -339,6 +339,11 @@ class VisualObjectsConfig:
         "so that the yaw turns with the path the positions observe. Urban s15's car 14, "
         "turning at 45-18 m, had its yaw turned twice as fast as the car by e_const "
         "(docs/visual_objects.md, 'Unseen seeds'); 0: off", "m/frame", lo=0.0, hi=100.0)
+    axis_free_heading_min_chord_m: float = param(
+        0.0, "> 0: each of the axis-free e_head's two displacements spans the fewest frames "
+        "that make it at least this long, so that its direction is long against the "
+        "positions' noise (the residual's noise is the positions', its yaw signal grows with "
+        "the chord); 0: one frame each", "m", lo=0.0, hi=1000.0)
     travel_min_path_m: float = param(
         3.0, "distance the track must have travelled before its travel axis is used (urban "
         "RPE_r 0.59/0.24/0.36 deg/m at 1.5 m, 0.59/0.23/0.36 at 3, 0.57/0.34/0.40 at 6)", "m")
