@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "tracking/flow_refinement.hpp"
 #include "tracking/instance_pixels.hpp"
 #include "tracking/object_tracker.hpp"
 
@@ -67,12 +68,27 @@ std::vector<ObjectTracker::FlowObservation> ObjectTracker::flow_observations(
   std::vector<std::uint8_t> support;
   std::vector<std::uint8_t> matched(cluster.points.size(), 0);
   for (const Match& m : matches) matched[m.point] = 1;
+  std::vector<int> candidates;
+  std::vector<Vec2> from, to;
   for (int i = 0; i < static_cast<int>(cluster.points.size()); ++i) {
     const objects::ObjectPoint& p = cluster.points[i];
     if (matched[i] || p.last.frame != last_frame_) continue;
     Vec2 uv;
     if (!flow_at(flow_, p.last.uv, &uv)) continue;
-    if (!inside_instance(instances_, uv, instance, instance_border_px_)) continue;
+    candidates.push_back(i);
+    from.push_back(p.last.uv);
+    to.push_back(uv);
+  }
+  std::vector<char> kept(candidates.size(), 1);
+  if (options_.flow_observations_lk_max_px > 0 && !gray_left_.empty() &&
+      previous_gray_frame_ == last_frame_ && !previous_gray_left_.empty()) {
+    if (lk_pyramids_.empty()) lk_pyramids_ = build_lk_pyramids(previous_gray_left_, gray_left_);
+    kept = refine_flow_pixels(lk_pyramids_, from, &to, options_.flow_observations_lk_max_px);
+  }
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    const int i = candidates[k];
+    const Vec2& uv = to[k];
+    if (!kept[k] || !inside_instance(instances_, uv, instance, instance_border_px_)) continue;
     FlowObservation o{i, uv};
     if (stereo) {
       // on the instance's pixels only (at least instance_pixel_min_fraction of the window):

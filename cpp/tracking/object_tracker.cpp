@@ -46,6 +46,8 @@ void ObjectTracker::reset() {
   last_scan_.clear();
   next_id_ = 0;
   last_frame_ = -1;
+  previous_gray_left_.release();
+  previous_gray_frame_ = -1;
 }
 
 double ObjectTracker::level_scale(int octave) const {
@@ -421,7 +423,14 @@ ObjectTrackingReport ObjectTracker::track(const Frame& input_frame, const cv::Ma
   hide_far_small_tracks(frame);  // after the class votes: this frame's class
   for (int owner : claimed_by_) report.num_points += owner >= 0;
   last_frame_ = frame.index;
+  if (options_.flow_observations_lk_max_px > 0 && !gray_left_.empty()) {
+    gray_left_.copyTo(previous_gray_left_);
+    previous_gray_frame_ = frame.index;
+  }
+  lk_pyramids_ = LkPyramids();
   // the caller's images are this call's only: no view of them outlives it
+  gray_left_.release();
+  gray_right_.release();
   instances_.release();
   labels_.release();
   flow_.release();

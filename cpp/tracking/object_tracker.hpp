@@ -36,6 +36,7 @@
 #include "objects/object_track.hpp"
 #include "objects/twist_estimation.hpp"
 #include "optim/visual_object_window.hpp"
+#include "tracking/flow_refinement.hpp"
 #include "tracking/frame.hpp"
 #include "tracking/level_weights.hpp"
 #include "objects/detection.hpp"
@@ -344,6 +345,11 @@ class ObjectTracker : public ObjectBundleTerms {
   Vec3 up_w_ = Vec3(0, -1, 0);          // the road normal of the frame being tracked
   cv::Mat instances_, labels_, flow_;   // during track(): the caller's images (views)
   cv::Mat gray_left_, gray_right_;      // during track(): the stereo pair (views; may be empty)
+  // the last frame's left image (a copy; flow_observations_lk_max_px) and its frame index
+  cv::Mat previous_gray_left_;
+  int previous_gray_frame_ = -1;
+  // during track(): the pyramids of the previous and current left images, built on first use
+  mutable LkPyramids lk_pyramids_;
   features::StereoSearchOptions search_;  // the flow-located points' SAD scan
   double instance_border_px_ = 0;       // during track(): the keypoints' instance border rule
   Vec4 road_plane_w_ = Vec4::Zero();    // its road plane (zero: none)

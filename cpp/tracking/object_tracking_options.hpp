@@ -59,6 +59,11 @@ struct ObjectTrackingOptions {
   // finds one (a stereo observation: it sees motion along the line of sight; else mono). Off:
   // on 22 simulated sequences it added ghosts (1 -> 4 over both flows, config_visual_objects.py)
   bool flow_observations_stereo = false;
+  // > 0: each flow-located pixel is refined by pyramidal Lucas-Kanade on the left images, from
+  // the point's last pixel, started at the flow's pixel, and kept when it lands within this
+  // many pixels of it (a dense flow's error would otherwise chain from frame to frame); 0: the
+  // flow's pixel as it is
+  double flow_observations_lk_max_px = 0;
   double max_step_m = 5.0;          // object motion per frame beyond this is no motion (a fit gone wrong)
   int max_misses = 5;               // frames without a valid twist before the track ends
   int reseed_after_misses = 1;      // failed frames before new points replace a cluster's (0: never)
@@ -170,6 +175,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("flow_observations_below_matches", o.flow_observations_below_matches, 0, 100000);
   visit("flow_observations_min_depth_m", o.flow_observations_min_depth_m, 0.0, 10000.0);
   visit("flow_observations_stereo", o.flow_observations_stereo, 0, 1);
+  visit("flow_observations_lk_max_px", o.flow_observations_lk_max_px, 0.0, 1000.0);
   visit("max_step_m", o.max_step_m, 0.01, 1000.0);
   visit("max_misses", o.max_misses, 0, 100000);
   visit("reseed_after_misses", o.reseed_after_misses, 0, 100000);

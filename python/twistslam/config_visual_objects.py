@@ -186,6 +186,13 @@ class VisualObjectsConfig:
         "ghosts 1 -> 3, ATE 0.102 -> 0.111 m (at 45-50 m the scan's depth is a metre off either "
         "way, and 3 keypoint matches plus 3 such points made a wrongly seeded far cluster valid); "
         "real 0001 camera-only: the far car's ATE 1.559 -> 1.613 m")
+    flow_observations_lk_max_px: float = param(
+        0.0, "> 0: each flow-located pixel is refined by pyramidal Lucas-Kanade on the left "
+        "images (11 px window, one level), from the point's last pixel and started at the "
+        "flow's pixel, and kept only when it lands within this many pixels of it: a point "
+        "located by the flow frame after frame chains the flow's error (DIS is a few tenths of "
+        "a pixel off on a car), so its observations slide along the body; 0: the flow's pixel "
+        "as it is", "px", lo=0.0, hi=1000.0)
     max_step_m: float = param(
         5.0, "an object pose moving farther than this in one frame is rejected: the twist LM "
         "then fails, and the window keeps its input poses. 5 m is 180 km/h at KITTI's 10 Hz. "
