@@ -52,18 +52,17 @@ struct ObjectTrackingOptions {
   double min_mask_overlap = 0.5;    // fraction of projected cluster points inside the mask
   int min_inliers = 6;              // inliers of the twist LM for a tracked frame
   // fewer keypoint matches than this: the flow-predicted pixels of the cluster's points seen
-  // in the last frame join the twist LM as mono observations (0: off)
-  int flow_observations_below_matches = 6;
-  double flow_observations_min_depth_m = 40;  // ... when its origin lies at least this far (m)
+  // in the last frame join the twist LM (0: off; 1000, above max_points: every cluster)
+  int flow_observations_below_matches = 1000;
+  double flow_observations_min_depth_m = 20;  // ... when its origin lies at least this far (m)
   // ... each with the depth of a SAD scan at its pixel on its instance's pixels, when the scan
-  // finds one (a stereo observation: it sees motion along the line of sight; else mono). Off:
-  // on 22 simulated sequences it added ghosts (1 -> 4 over both flows, config_visual_objects.py)
-  bool flow_observations_stereo = false;
+  // finds one (a stereo observation: it sees motion along the line of sight; else mono)
+  bool flow_observations_stereo = true;
   // > 0: each flow-located pixel is refined by pyramidal Lucas-Kanade on the left images, from
   // the point's last pixel, started at the flow's pixel, and kept when it lands within this
   // many pixels of it (a dense flow's error would otherwise chain from frame to frame); 0: the
-  // flow's pixel as it is
-  double flow_observations_lk_max_px = 0;
+  // flow's pixel as it is. config_visual_objects.py has the measurements of all four
+  double flow_observations_lk_max_px = 1.0;
   double max_step_m = 5.0;          // object motion per frame beyond this is no motion (a fit gone wrong)
   int max_misses = 5;               // frames without a valid twist before the track ends
   int reseed_after_misses = 1;      // failed frames before new points replace a cluster's (0: never)
