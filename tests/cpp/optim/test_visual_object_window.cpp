@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <cmath>
@@ -368,6 +369,32 @@ Arc arc(double x0, double z0, double omega, double step_m, int frames) {
   return a;
 }
 
+// A car on `truth` seen in stereo with 0.5 px noise: 40 points of a flat face 0.4 m deep (at
+// 45 m its points barely show a yaw step), the camera at the origin, the first pose fixed;
+// start(f) gives the window's initial pose of frame f.
+VisualObjectWindow flat_face_window(const geometry::StereoCamera& cam, const Arc& truth,
+                                    unsigned seed, const std::function<Mat4(int)>& start,
+                                    bool wheeled) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> x(-0.8, 0.8), y(-0.6, 0.6), z(-0.2, 0.2);
+  std::normal_distribution<double> px(0, 0.5);
+  VisualObjectWindow w;
+  for (int p = 0; p < 40; ++p) w.X_o.push_back(Vec3(x(rng), y(rng), z(rng)));
+  for (int f = 0; f < static_cast<int>(truth.T_w_o.size()); ++f) {
+    w.T_c_w.push_back(Mat4::Identity());
+    w.T_w_o.push_back(start(f));
+    for (int p = 0; p < static_cast<int>(w.X_o.size()); ++p) {
+      const Vec3 X_c = (truth.T_w_o[f] * w.X_o[p].homogeneous()).head<3>();
+      w.observations.push_back({f, p, cam.project(X_c) + Vec2(px(rng), px(rng)),
+                                cam.project_right(X_c).x() + px(rng), 1.0});
+    }
+  }
+  w.num_fixed_frames = 1;
+  w.up_w = kUp;
+  w.wheeled = wheeled;
+  return w;
+}
+
 TEST(AxisFreeHeadingCost, ZeroOnAnArcAndTheOverTurnedYawPays) {
   const Arc a = arc(-3, 40, 0.03, 0.6, 3);
   const Vec3 d1 = a.T_w_o[1].topRightCorner<3, 1>() - a.T_w_o[0].topRightCorner<3, 1>();
@@ -417,29 +444,12 @@ TEST(VisualObjectWindow, AxisFreeHeadingTermUndoesAnOverTurnedYaw) {
   const int frames = 8;
   const double omega = 0.03;
   const Arc truth = arc(-3, 45, omega, 0.6, frames);
-  auto make_window = [&](bool wheeled) {
-    std::mt19937 rng(7);
-    // a flat face 0.4 m deep: at 45 m its points barely show a yaw step (the window alone keeps
-    // most of the over-turn)
-    std::uniform_real_distribution<double> x(-0.8, 0.8), y(-0.6, 0.6), z(-0.2, 0.2);
-    std::normal_distribution<double> px(0, 0.5);
-    VisualObjectWindow w;
-    for (int p = 0; p < 40; ++p) w.X_o.push_back(Vec3(x(rng), y(rng), z(rng)));
-    for (int f = 0; f < frames; ++f) {
-      w.T_c_w.push_back(Mat4::Identity());
+  auto make_window = [&](bool wheeled) {  // started with the yaw turning twice as fast
+    return flat_face_window(cam, truth, 7, [&](int f) {
       Mat4 start = truth.T_w_o[f];
       start.topLeftCorner<3, 3>() = yaw(2 * omega * f).topLeftCorner<3, 3>();
-      w.T_w_o.push_back(start);
-      for (int p = 0; p < static_cast<int>(w.X_o.size()); ++p) {
-        const Vec3 X_c = (truth.T_w_o[f] * w.X_o[p].homogeneous()).head<3>();
-        w.observations.push_back({f, p, cam.project(X_c) + Vec2(px(rng), px(rng)),
-                                  cam.project_right(X_c).x() + px(rng), 1.0});
-      }
-    }
-    w.num_fixed_frames = 1;
-    w.up_w = kUp;
-    w.wheeled = wheeled;
-    return w;
+      return start;
+    }, wheeled);
   };
   VisualObjectWindowOptions o;
   o.axis_free_heading_min_step_m = 0.2;
@@ -472,27 +482,12 @@ TEST(VisualObjectWindow, AxisFreeHeadingChordsOutlastThePositionsNoise) {
   const int frames = 8;
   const double omega = 0.03, step = 0.6, zigzag = 0.04;  // rad/frame, m/frame, m
   const Arc truth = arc(-3, 45, omega, step, frames);
-  auto make_window = [&]() {
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<double> x(-0.8, 0.8), y(-0.6, 0.6), z(-0.2, 0.2);
-    std::normal_distribution<double> px(0, 0.5);
-    VisualObjectWindow w;
-    for (int p = 0; p < 40; ++p) w.X_o.push_back(Vec3(x(rng), y(rng), z(rng)));
-    for (int f = 0; f < frames; ++f) {
-      w.T_c_w.push_back(Mat4::Identity());
-      Mat4 start = truth.T_w_o[f];  // the true yaw; the position off sideways, alternately
+  auto make_window = [&]() {  // the true yaw; the position off sideways, alternately
+    return flat_face_window(cam, truth, 11, [&](int f) {
+      Mat4 start = truth.T_w_o[f];
       start.topRightCorner<3, 1>() += start.topLeftCorner<3, 3>() * Vec3((f % 2 ? 1 : -1) * zigzag, 0, 0);
-      w.T_w_o.push_back(start);
-      for (int p = 0; p < static_cast<int>(w.X_o.size()); ++p) {
-        const Vec3 X_c = (truth.T_w_o[f] * w.X_o[p].homogeneous()).head<3>();
-        w.observations.push_back({f, p, cam.project(X_c) + Vec2(px(rng), px(rng)),
-                                  cam.project_right(X_c).x() + px(rng), 1.0});
-      }
-    }
-    w.num_fixed_frames = 1;
-    w.up_w = kUp;
-    w.wheeled = true;
-    return w;
+      return start;
+    }, true);
   };
   auto worst_yaw_error = [&](const VisualObjectWindow& w) {
     double worst = 0;
