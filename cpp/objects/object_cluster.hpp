@@ -32,6 +32,9 @@ struct ObjectPoint {
   std::vector<ObjectPointObservation> archive;
   int visible = 1;              // frames in which it was predicted inside the image
   int found = 1;                // frames in which it was matched and an inlier
+  // observations with a disparity (its creation's included): a point placed without one (at
+  // its mask's ground contact, or its nearest stereo neighbour's depth) holds a guessed depth
+  int stereo_seen = 0;
   LabelVotes class_votes;       // classes of its 2D observations (S3LAM-style vote)
 
   double found_ratio() const { return visible > 0 ? static_cast<double>(found) / visible : 0.0; }

@@ -20,6 +20,7 @@ using detail::contains;
 using detail::median_point;
 using detail::median_value;
 using detail::observe;
+using detail::recenter_points;
 using detail::transform;
 
 namespace {
@@ -272,26 +273,27 @@ void ObjectTracker::recenter(int c) {
   // a canonical frame's origin is the box centre, not the points' median
   if (!(options_.recenter_distance_m > 0) || tracks_[c].canonical) return;
   objects::ObjectCluster& cluster = clusters_[c];
-  std::vector<Vec3> confirmed;
-  for (const objects::ObjectPoint& p : cluster.points)
-    if (p.found >= 2) confirmed.push_back(p.X_o);
+  const objects::TrackFrame& last = tracks_[c].frames.back();
+  const bool far = transform(last.T_c_w * last.T_w_o, Vec3::Zero()).z() > options_.recenter_spread_min_depth_m;
   // the points the track confirmed and later culled (kept for the final smoothing) still say
   // where its earlier rows saw the car: with them the median converges instead of following
-  // whichever points are live now
-  if (options_.recenter_with_retired_points)
-    for (const objects::ObjectPoint& p : cluster.retired)
-      if (p.found >= 2) confirmed.push_back(p.X_o);
+  // whichever points are live now. A far car seeded at its ground contact holds mono points
+  // at a guessed depth (metres off at 45 m), and the stereo points it gains later disagree
+  // with them: the median of all lies between, their spread bars the re-centring, and the
+  // origin stays off the car. Near, the stereo holds most points and the guessed ones fill
+  // the faces it misses (recenter_on_stereo_points there lost crowded s1's car 17).
+  const std::vector<Vec3> confirmed =
+      recenter_points(cluster, options_.recenter_with_retired_points,
+                      options_.recenter_on_stereo_points && far, options_.min_inliers);
   if (static_cast<int>(confirmed.size()) < options_.min_inliers) return;
   const Vec3 centre = median_point(confirmed);
   if (centre.norm() <= options_.recenter_distance_m) return;
   // a far cluster's points spread wider than a car is long disagree about where it is (a far
   // track whose depth motion lagged placed its later points metres ahead of its origin): their
   // median is no centre, and moving every row onto it would move the rows they never saw too
-  if (options_.recenter_max_spread_m > 0 &&
-      detail::largest_quantile_spread(confirmed, kRecenterSpreadQuantile) > options_.recenter_max_spread_m) {
-    const objects::TrackFrame& last = tracks_[c].frames.back();
-    if (transform(last.T_c_w * last.T_w_o, Vec3::Zero()).z() > options_.recenter_spread_min_depth_m) return;
-  }
+  if (options_.recenter_max_spread_m > 0 && far &&
+      detail::largest_quantile_spread(confirmed, kRecenterSpreadQuantile) > options_.recenter_max_spread_m)
+    return;
   // T_w_o' = T_w_o T_o_o' with T_o_o' a translation by centre: the twists of eq. 2 act on the
   // left (T_w_o(i+1) = exp(Pi xi) T_w_o(i)), so they are unchanged
   for (objects::TrackFrame& row : tracks_[c].frames)

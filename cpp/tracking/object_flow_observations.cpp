@@ -6,14 +6,16 @@
 // position (eq. 4); where none is found, the flow itself located the point. Such a point
 // joins the LM as a mono observation at that pixel (no keypoint, so no disparity), when the
 // pixel and its neighbourhood lie on the cluster's instance: at a silhouette the flow of the
-// background bleeds in. Only beyond 40 m by default (ObjectTrackingOptions): a mono
-// observation shows no motion along the line of sight, and nearer, where keypoints are
-// plenty, far oncoming tracks at 35-45 m stalled on them. Not for a track with a canonical
-// (box) frame: its boxes place it, and the classical row's urban s8 gained a ghost with them.
-// With the stereo pair (flow_observations_stereo), each such pixel is also scanned along the
-// right image's row on its instance's pixels of the SAD window (features::search_pixel_stereo):
-// a disparity makes it a stereo observation, which sees the motion along the line of sight
-// that a mono one misses (far oncoming cars stalled on mono observations).
+// background bleeds in. With the stereo pair (flow_observations_stereo), each such pixel is
+// also scanned along the right image's row on its instance's pixels of the SAD window
+// (features::search_pixel_stereo): a disparity makes it a stereo observation, which sees the
+// motion along the line of sight that a mono one misses (far oncoming cars stalled on mono
+// observations). With a dense flow's error chaining from frame to frame, each pixel is first
+// refined by Lucas-Kanade from the point's last pixel (flow_observations_lk_max_px). By
+// default every cluster whose origin lies beyond 20 m gets them (ObjectTrackingOptions): a
+// lead car's rear-face keypoints live 2-3 frames of the window, and without points that live
+// on its object frame slid along its body. Not for a track with a canonical (box) frame: its
+// boxes place it, and the classical row's urban s8 gained a ghost with them.
 // docs/visual_objects.md has the figures.
 #include <algorithm>
 #include <cmath>

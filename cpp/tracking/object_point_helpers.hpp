@@ -14,6 +14,7 @@ namespace twistslam::tracking::detail {
 inline void observe(objects::ObjectPoint& p, const objects::ObjectPointObservation& o, int window,
                     bool archive) {
   p.last = o;
+  if (o.u_right >= 0) ++p.stereo_seen;
   p.history.push_back(o);
   if (static_cast<int>(p.history.size()) > std::max(window, 1)) p.history.erase(p.history.begin());
   if (archive) p.archive.push_back(o);
@@ -62,6 +63,28 @@ inline double largest_quantile_spread(const std::vector<Vec3>& points, double qu
 // (object_scans.cpp).
 Points3 points_in_box(const Points3& scan_c, const Mat4& T_c_o, const Mat4& T_x_c, const Vec3& size,
                       double margin, double ground_clearance);
+
+// The cluster's confirmed points (found twice or more; its retired ones too with
+// `with_retired`) that a re-centring takes the median of: with `prefer_stereo`, those seen in
+// stereo at least once (ObjectPoint::stereo_seen) when min_points of them are, else all.
+inline std::vector<Vec3> recenter_points(const objects::ObjectCluster& cluster, bool with_retired,
+                                         bool prefer_stereo, int min_points) {
+  const auto collect = [&](bool stereo_only) {
+    std::vector<Vec3> out;
+    const auto take = [&](const objects::ObjectPoint& p) {
+      if (p.found >= 2 && (!stereo_only || p.stereo_seen > 0)) out.push_back(p.X_o);
+    };
+    for (const objects::ObjectPoint& p : cluster.points) take(p);
+    if (with_retired)
+      for (const objects::ObjectPoint& p : cluster.retired) take(p);
+    return out;
+  };
+  if (prefer_stereo) {
+    std::vector<Vec3> stereo = collect(true);
+    if (static_cast<int>(stereo.size()) >= min_points) return stereo;
+  }
+  return collect(false);
+}
 
 inline bool contains(const std::vector<int>& ids, int id) {
   return std::find(ids.begin(), ids.end(), id) != ids.end();

@@ -96,6 +96,9 @@ struct ObjectTrackingOptions {
   double recenter_spread_min_depth_m = 25.0;
   // the median over the retired points too (those final_smoothing keeps; config.py says why)
   bool recenter_with_retired_points = true;
+  // beyond recenter_spread_min_depth_m, the median (and the spread bound) over the confirmed
+  // points seen in stereo when at least min_inliers of them are (config.py says why)
+  bool recenter_on_stereo_points = true;
   // once the sequence ends, every track's rows, all observations of its points and its LiDAR
   // terms in one problem (tracking/object_smoothing.cpp); the online poses are kept beside
   bool final_smoothing = true;
@@ -200,6 +203,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("recenter_max_spread_m", o.recenter_max_spread_m, 0.0, 1000.0);
   visit("recenter_spread_min_depth_m", o.recenter_spread_min_depth_m, 0.0, 10000.0);
   visit("recenter_with_retired_points", o.recenter_with_retired_points, 0, 1);
+  visit("recenter_on_stereo_points", o.recenter_on_stereo_points, 0, 1);
   visit("final_smoothing", o.final_smoothing, 0, 1);
   visit("smoothing_iterations", o.smoothing_iterations, 1, 1000);
   visit("smoothing_frame_observations", o.smoothing_frame_observations, 0, 1000000);

@@ -16,6 +16,7 @@
 #include "common/random_descriptor.hpp"
 #include "geometry/se3.hpp"
 #include "geometry/so3.hpp"
+#include "tracking/object_point_helpers.hpp"
 #include "tracking/object_tracker.hpp"
 
 using namespace twistslam;
@@ -273,3 +274,50 @@ TEST(ObjectTrackerRecenter, RetiredPointsKeepTheMedianOnTheWholeObject) {
 }
 
 }  // namespace
+
+namespace {
+
+objects::ObjectPoint point_at(const Vec3& X_o, int found, bool stereo) {
+  objects::ObjectPoint p;
+  p.X_o = X_o;
+  p.found = found;
+  p.stereo_seen = stereo ? 1 : 0;
+  return p;
+}
+
+}  // namespace
+
+// recenter_on_stereo_points: a far car seeded at its ground contact holds mono points at a
+// guessed depth; the stereo points it gains later are where the car is. The re-centring's
+// median takes the stereo ones when there are enough, else every confirmed point.
+TEST(ObjectTrackerRecenter, StereoPointsPlaceTheMedianWhenThereAreEnough) {
+  objects::ObjectCluster cluster;
+  for (int k = 0; k < 10; ++k) cluster.points.push_back(point_at(Vec3(0.1 * k, 0, 9.0), 3, false));
+  for (int k = 0; k < 6; ++k) cluster.points.push_back(point_at(Vec3(0.1 * k, 0, 0.0), 3, true));
+  cluster.points.push_back(point_at(Vec3(0, 0, 0), 1, true));  // found once: not confirmed
+  const auto median_z = [](const std::vector<Vec3>& points) {
+    return tracking::detail::median_point(points).z();
+  };
+  const auto stereo = tracking::detail::recenter_points(cluster, true, true, 6);
+  EXPECT_EQ(stereo.size(), 6u);
+  EXPECT_NEAR(median_z(stereo), 0.0, 1e-12);
+  const auto all = tracking::detail::recenter_points(cluster, true, false, 6);
+  EXPECT_EQ(all.size(), 16u);
+  EXPECT_NEAR(median_z(all), 9.0, 1e-12);  // the guessed points outnumber them
+  // fewer stereo points than asked for: every confirmed point
+  EXPECT_EQ(tracking::detail::recenter_points(cluster, true, true, 7).size(), 16u);
+  // retired points count when asked to
+  cluster.retired.push_back(point_at(Vec3(0, 0, 0), 2, true));
+  EXPECT_EQ(tracking::detail::recenter_points(cluster, true, true, 7).size(), 7u);
+  EXPECT_EQ(tracking::detail::recenter_points(cluster, false, true, 7).size(), 16u);
+}
+
+// A point counts its observations with a disparity, its first one included.
+TEST(ObjectTrackerRecenter, ObservationsWithADisparityAreCounted) {
+  objects::ObjectPoint p;
+  tracking::detail::observe(p, {0, Vec2(10, 10), -1.0, 0}, 8, false);
+  EXPECT_EQ(p.stereo_seen, 0);
+  tracking::detail::observe(p, {1, Vec2(11, 10), 3.5, 0}, 8, false);
+  tracking::detail::observe(p, {2, Vec2(12, 10), -1.0, 0}, 8, false);
+  EXPECT_EQ(p.stereo_seen, 1);
+}
