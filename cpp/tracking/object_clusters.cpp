@@ -101,7 +101,8 @@ std::vector<std::pair<int, Vec3>> ObjectTracker::depth_fill_points(
 
 bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points,
                                 bool ground_contact, std::vector<std::pair<int, Vec3>>* kept,
-                                Vec3* centroid, bool* lidar_seeded_out) const {
+                                Vec3* centroid, bool* lidar_seeded_out,
+                                bool* contact_seeded_out) const {
   auto fresh = free_instance_points(frame, instance);
   const double ratio = lidar_options_.mask_max_depth_ratio;
   const std::vector<double>* returns = ratio > 0 ? mask_lidar_depths(instance) : nullptr;
@@ -141,6 +142,7 @@ bool ObjectTracker::seed_points(const Frame& frame, int instance, int min_points
     const auto mono = ground_contact_points(frame, instance);
     // the stereo points keep their depth: they place the car where they can
     fresh.insert(fresh.end(), mono.begin(), mono.end());
+    if (contact_seeded_out) *contact_seeded_out = !mono.empty();
     // the contact gives the depth the points lack: fewer of them carry the planar twist
     if (!mono.empty()) min_points = std::min(min_points, options_.min_contact_cluster_points);
   }
@@ -191,11 +193,14 @@ void ObjectTracker::add_points(int c, const Frame& frame, int instance) {
   }
 }
 
-bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o) {
+bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o,
+                           bool* contact_seeded) {
   std::vector<std::pair<int, Vec3>> kept;
   Vec3 centroid;
   const bool vehicle = tracks_[c].link == geometry::LinkType::kPlanar;
-  if (!seed_points(frame, instance, min_seed_points(tracks_[c].link), vehicle, &kept, &centroid))
+  if (contact_seeded) *contact_seeded = false;
+  if (!seed_points(frame, instance, min_seed_points(tracks_[c].link), vehicle, &kept, &centroid,
+                   nullptr, contact_seeded))
     return false;
   objects::ObjectCluster& cluster = clusters_[c];
   // A cluster without a velocity yet (it failed in its second frame) has no prediction worth

@@ -207,9 +207,10 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
   // box is its own (a new cluster started on it would duplicate the object)
   const bool box_kept = !valid && detection >= 0 && track.canonical;
   if (box_kept && reseed_instance < 0) reseed_instance = free_instance_under(detections_[detection].box);
+  bool contact_seeded = false;
   const bool reseeded = !valid && reseed_instance >= 0 && options_.reseed_after_misses > 0 &&
                         track.misses + 1 >= options_.reseed_after_misses &&
-                        reseed(c, frame, reseed_instance, &T_w_o_reseed);
+                        reseed(c, frame, reseed_instance, &T_w_o_reseed, &contact_seeded);
   if (reseeded && reseed_instance != instance) {
     assigned_instances_.insert(reseed_instance);
     instance = reseed_instance;
@@ -246,11 +247,13 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
                                                       : objects::TrackState::kLost;
   }
   // a cluster never tracked since its birth, re-seeded: the row is one frame's stereo points,
-  // reported only where their depth is good to a car's half length
+  // reported only where their depth is good to a car's half length; placed by its ground
+  // contact (8-15 % beyond the car's near face), nearer still
   const bool never_tracked = track.hits < 2;
+  const double report_max_depth = contact_seeded ? options_.untracked_contact_report_max_depth_m
+                                                 : options_.untracked_report_max_depth_m;
   const bool reseed_reported =
-      reseeded && (!never_tracked || (frame.T_c_w * row.T_w_o)(2, 3) <=
-                                         options_.untracked_report_max_depth_m);
+      reseeded && (!never_tracked || (frame.T_c_w * row.T_w_o)(2, 3) <= report_max_depth);
   row.reported = valid || reseed_reported || box_kept;
   row.T_c_w = frame.T_c_w;
   track.frames.push_back(row);

@@ -265,10 +265,11 @@ class ObjectTracker : public ObjectBundleTerms {
   // and with too few stereo points the keypoints without depth take the LiDAR depth of their
   // mask (lidar_depth_points; ObjectLidarOptions::instance_lidar_depth; vehicles) before the
   // cues above.
-  // *lidar_seeded (when given) tells whether the LiDAR completed the seed.
+  // *lidar_seeded (when given) tells whether the LiDAR completed the seed, *contact_seeded
+  // whether the ground contact did.
   bool seed_points(const Frame& frame, int instance, int min_points, bool ground_contact,
                    std::vector<std::pair<int, Vec3>>* kept, Vec3* centroid,
-                   bool* lidar_seeded = nullptr) const;
+                   bool* lidar_seeded = nullptr, bool* contact_seeded = nullptr) const;
   // The free keypoints of `instance` without a stereo depth, each at the depth the LiDAR
   // returns on the instance's own mask give it (a local plane through those near it,
   // lidar/lidar_depth.hpp; world frame); empty without a scan or when the returns' median
@@ -302,8 +303,9 @@ class ObjectTracker : public ObjectBundleTerms {
   bool start_cluster(const Frame& frame, int instance, int class_id, const Vec3& up_w);
   // The free stereo points of `instance` join the cluster, placed with *T_w_o (the
   // prediction; a cluster without velocity moves to their centroid and drops its old points).
-  // False when the instance has too few points.
-  bool reseed(int c, const Frame& frame, int instance, Mat4* T_w_o);
+  // False when the instance has too few points. *contact_seeded (when given): the ground
+  // contact placed some of them.
+  bool reseed(int c, const Frame& frame, int instance, Mat4* T_w_o, bool* contact_seeded = nullptr);
   void cull(objects::ObjectCluster& cluster) const;
   // e_dyna + e_const (+ e_head) over the cluster's last window_frames frames (eq. 9), camera
   // fixed.

@@ -68,6 +68,8 @@ struct ObjectTrackingOptions {
   int reseed_after_misses = 1;      // failed frames before new points replace a cluster's (0: never)
   // a cluster never tracked since its birth reports its re-seeded rows only this near (m)
   double untracked_report_max_depth_m = 45;
+  // ... and those its ground contact placed only this near (m; config.py says why)
+  double untracked_contact_report_max_depth_m = 45;
   // tracks of these classes (people) report rows without a box of their own only this near (m)
   std::vector<int> small_object_class_ids{24, 25};
   double small_object_report_max_depth_m = 35;
@@ -182,6 +184,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("max_misses", o.max_misses, 0, 100000);
   visit("reseed_after_misses", o.reseed_after_misses, 0, 100000);
   visit("untracked_report_max_depth_m", o.untracked_report_max_depth_m, 0.0, 10000.0);
+  visit("untracked_contact_report_max_depth_m", o.untracked_contact_report_max_depth_m, 0.0, 10000.0);
   visit("small_object_class_ids", o.small_object_class_ids, 0, 65535);
   visit("small_object_report_max_depth_m", o.small_object_report_max_depth_m, 0.0, 10000.0);
   visit("max_point_spread_m", o.max_point_spread_m, 0.1, 1000.0);

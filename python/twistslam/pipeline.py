@@ -9,7 +9,8 @@
 from __future__ import annotations
 
 import dataclasses
-
+import os
+import threading
 import time
 import warnings
 from dataclasses import dataclass
@@ -67,8 +68,20 @@ class _Loaded:
     detections: Detections3D | None = None
 
 
+def _lower_priority(nice: int) -> None:
+    """Add ``nice`` to the calling thread's niceness (Linux threads have their own); a
+    platform without per-thread niceness keeps it."""
+    if nice <= 0 or not hasattr(os, "setpriority"):
+        return
+    try:
+        tid = threading.get_native_id()
+        os.setpriority(os.PRIO_PROCESS, tid, os.getpriority(os.PRIO_PROCESS, tid) + nice)
+    except OSError:
+        pass
+
+
 def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | None,
-                perception: Perception, lidar: bool = False) -> Iterator[_Loaded]:
+                perception: Perception, lidar: bool = False, nice: int = 0) -> Iterator[_Loaded]:
     """Each frame with its detections, segmentation and flow; frame i+1 is read, detected and
     segmented, and its flow computed, in a background thread while the caller tracks frame i
     (the PNG decoder, OpenCV and the core all release the GIL). The detector runs once per
@@ -110,7 +123,7 @@ def _prefetched(sequence: Sequence, indices: range, labels: PanopticLabels | Non
         return _Loaded(frame, class_ids, instance_ids, flow, ms,
                        detections if perception.fuse_detections else None)
 
-    with ThreadPoolExecutor(max_workers=1) as pool:
+    with ThreadPoolExecutor(max_workers=1, initializer=_lower_priority, initargs=(nice,)) as pool:
         pending = pool.submit(load, indices[0]) if len(indices) else None
         for k in range(len(indices)):
             item = pending.result()  # re-raises a loading error, naming the frame
@@ -232,7 +245,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         # the scans serve keypoint depth and the registration of object scans (e_reg)
         lidar = config.lidar.use_depth or (perception.fuse_detections
                                            and config.lidar_objects.use_registration)
-        for item in _prefetched(sequence, indices, labels, perception, lidar=lidar):
+        for item in _prefetched(sequence, indices, labels, perception, lidar=lidar,
+                                nice=config.run.loader_nice):
             out = slam.track(item.frame, item.class_ids, instances=item.instance_ids,
                              flow=item.flow, detections=item.detections)
             now = time.perf_counter()

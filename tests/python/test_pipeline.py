@@ -570,3 +570,23 @@ def test_end_to_end_bad_size_is_an_error(sim_root, tmp_path):
         Image.fromarray(np.zeros((SIM_H - 1, SIM_W, 3), np.uint8)).save(image_path(root, cam, 4))
     with pytest.raises(ValueError, match=f"frame 4: image size {SIM_W}x{SIM_H - 1} differs"):
         twistslam.run((root, SEQ), progress=False)
+
+
+def test_loader_thread_runs_at_a_lower_priority_than_the_loop():
+    """run.loader_nice: the reading thread's niceness rises by it, the caller's stays."""
+    import os
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    from twistslam.pipeline import _lower_priority
+
+    def niceness() -> int:
+        return os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+
+    mine = niceness()
+    with ThreadPoolExecutor(max_workers=1, initializer=_lower_priority, initargs=(3,)) as pool:
+        theirs = pool.submit(niceness).result()
+    assert theirs == min(mine + 3, 19)
+    assert niceness() == mine
+    with ThreadPoolExecutor(max_workers=1, initializer=_lower_priority, initargs=(0,)) as pool:
+        assert pool.submit(niceness).result() == mine

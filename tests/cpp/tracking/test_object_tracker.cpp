@@ -158,6 +158,26 @@ TEST_F(TrackerScene, CarTheRightCameraCannotSeeStartsAtItsGroundContactDepth) {
   EXPECT_NEAR(moved.z(), 0.4 * 5, 0.4);
 }
 
+// `frames` frames of `car` (instance 5) with no stereo depth for its keypoints, standing on
+// `road_plane` with road everywhere under its mask, over the static background.
+std::vector<tracking::ObjectTrackingReport> track_mono_car_on_road(
+    tracking::ObjectTracker& tracker, const Car& car, int frames, const Vec4& road_plane,
+    const Background& background) {
+  std::vector<tracking::ObjectTrackingReport> reports;
+  for (int i = 0; i < frames; ++i) {
+    SceneFrame f(i);
+    f.mono = true;
+    f.add_car(car, i, 5);
+    f.mono = false;
+    f.add_background(background);
+    cv::Mat labels(kCamera.height, kCamera.width, CV_32SC1, cv::Scalar(kRoad));
+    labels.setTo(kCar, f.instances > 0);
+    reports.push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
+                                    labels, road_plane));
+  }
+  return reports;
+}
+
 TEST_F(TrackerScene, ACarPlacedByItsGroundContactStartsFromFewerKeypoints) {
   // a far car's small mask, partly behind a nearer car, keeps 4 keypoints and none with a
   // stereo depth: the contact gives their depth, and min_contact_cluster_points (not the
@@ -170,18 +190,7 @@ TEST_F(TrackerScene, ACarPlacedByItsGroundContactStartsFromFewerKeypoints) {
     tracking::ObjectTrackingOptions options;
     options.min_contact_cluster_points = min_contact_points;
     auto tracker = make_tracker(options);
-    std::vector<tracking::ObjectTrackingReport> reports;
-    for (int i = 0; i < 4; ++i) {
-      SceneFrame f(i);
-      f.mono = true;
-      f.add_car(few, i, 5);
-      f.mono = false;
-      f.add_background(background);
-      cv::Mat labels(kCamera.height, kCamera.width, CV_32SC1, cv::Scalar(kRoad));
-      labels.setTo(kCar, f.instances > 0);
-      reports.push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
-                                      labels, road_plane));
-    }
+    auto reports = track_mono_car_on_road(tracker, few, 4, road_plane, background);
     return std::make_pair(std::move(tracker), reports);
   };
   ASSERT_GT(tracking::ObjectTrackingOptions().min_new_planar_cluster_points, 4);
@@ -378,6 +387,32 @@ TEST_F(TrackerScene, CarWithFewStereoDepthsStartsWithItsOtherKeypointsAtTheNeare
   EXPECT_TRUE(run(options, c0, {far_box}).first.tracks().empty());
   lidar.depth_fill_below_points = options.depth_fill_below_points;
   EXPECT_EQ(run(options, c0, {far_box}, lidar).first.tracks().size(), 1u);
+}
+
+// untracked_contact_report_max_depth_m: a cluster never tracked whose re-seeded rows its
+// ground contact placed (too few points for the twist: 4 mono keypoints, re-seeded at the
+// contact every frame) reports them only within that depth; the birth row stands.
+TEST_F(TrackerScene, ContactPlacedRowsOfAClusterNeverTrackedAreReportedOnlyWhenNear) {
+  Car few = make_car(rng, Vec3(1.0, 0.9, 16), Vec3(0, 0, 0.4), 0.0, 4);
+  for (Vec3& X : few.X_o) X.z() = -0.9;
+  few.X_o[0].y() = 0.7;  // by a wheel: the mask's lower edge meets the road
+  const Vec4 road_plane(0, -1, 0, 1.65);
+  auto reported_rows = [&](double contact_max_depth_m) {
+    tracking::ObjectTrackingOptions options;
+    options.min_contact_cluster_points = 4;
+    options.untracked_contact_report_max_depth_m = contact_max_depth_m;
+    auto tracker = make_tracker(options);
+    track_mono_car_on_road(tracker, few, 4, road_plane, background);
+    EXPECT_EQ(tracker.tracks().size(), 1u);
+    if (tracker.tracks().empty()) return -1;
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    EXPECT_EQ(track.frames.size(), 4u);
+    EXPECT_EQ(track.hits, 1);  // never tracked: re-seeded every frame
+    return static_cast<int>(std::count_if(track.frames.begin(), track.frames.end(),
+                                           [](const auto& r) { return r.reported; }));
+  };
+  EXPECT_EQ(reported_rows(30.0), 4);  // the car at 15-17 m: within either bound
+  EXPECT_EQ(reported_rows(10.0), 1);  // beyond it: the birth row alone
 }
 
 TEST_F(TrackerScene, AClusterNeverTrackedReportsItsReseededRowsOnlyWhenNear) {
