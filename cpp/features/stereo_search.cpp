@@ -140,6 +140,54 @@ bool search_pixel_stereo(const cv::Mat& left, const cv::Mat& right,
   return scan_depth(at, left, right, setup, options, support, u_right, depth);
 }
 
+namespace {
+
+// The window pixels of keypoint kl (on level L) that lie on instance `id` at level 0: support
+// (row-major, 1 = on it); returns their count. *beside_other (when given): whether a pixel of
+// the window lies on another instance.
+int instance_support(const cv::KeyPoint& kl, const cv::Mat& L, const ScanSetup& setup,
+                     const StereoSearchOptions& options, const cv::Mat& instances, int id,
+                     std::uint8_t* support, bool* beside_other = nullptr) {
+  const int cols = 2 * options.patch_radius + 1, rows = 2 * options.patch_half_height + 1;
+  const cv::Point2f pl = image_to_level(kl.pt, setup.size0, L.size());
+  const int xl = cvRound(pl.x), y = cvRound(pl.y);
+  int count = 0;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      // the window pixel's centre in the level-0 image (its instance there)
+      const cv::Point2f p0 = level_to_image(
+          cv::Point2f(static_cast<float>(xl - options.patch_radius + c),
+                      static_cast<float>(y - options.patch_half_height + r)),
+          setup.size0, L.size());
+      const int u = std::clamp(static_cast<int>(std::lround(p0.x)), 0, instances.cols - 1);
+      const int v = std::clamp(static_cast<int>(std::lround(p0.y)), 0, instances.rows - 1);
+      const int here = instances.at<int>(v, u);
+      const bool own = here == id;
+      support[static_cast<size_t>(r) * cols + c] = own;
+      count += own;
+      if (beside_other != nullptr && here > 0 && !own) *beside_other = true;
+    }
+  return count;
+}
+
+// The instance id under keypoint kl (0: none or outside the image).
+int instance_at(const cv::KeyPoint& kl, const cv::Mat& instances) {
+  const int u0 = static_cast<int>(std::lround(kl.pt.x)), v0 = static_cast<int>(std::lround(kl.pt.y));
+  if (u0 < 0 || v0 < 0 || u0 >= instances.cols || v0 >= instances.rows) return 0;
+  return std::max(instances.at<int>(v0, u0), 0);
+}
+
+void check_instances(const char* who, const cv::Mat& instances, const cv::Size& size0,
+                     float min_support_fraction) {
+  if (instances.type() != CV_32SC1 || instances.size() != size0)
+    throw std::invalid_argument(std::string(who) + ": instances must be int32 ids of the "
+                                "level-0 image's size");
+  if (!(min_support_fraction >= 0.0f && min_support_fraction <= 1.0f))
+    throw std::invalid_argument(std::string(who) + ": min_support_fraction must be in [0, 1]");
+}
+
+}  // namespace
+
 InstanceSupportReport depth_on_instance_pixels(
     const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
     const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
@@ -147,46 +195,67 @@ InstanceSupportReport depth_on_instance_pixels(
     float min_support_fraction, StereoMatches* matches) {
   check_arguments("depth_on_instance_pixels", left, pyramid_left, pyramid_right, camera, options,
                   which, *matches);
-  if (instances.type() != CV_32SC1 || instances.size() != pyramid_left[0].size())
-    throw std::invalid_argument("depth_on_instance_pixels: instances must be int32 ids of the "
-                                "level-0 image's size");
-  if (!(min_support_fraction >= 0.0f && min_support_fraction <= 1.0f))
-    throw std::invalid_argument("depth_on_instance_pixels: min_support_fraction must be in [0, 1]");
+  check_instances("depth_on_instance_pixels", instances, pyramid_left[0].size(), min_support_fraction);
   const ScanSetup setup = scan_setup(pyramid_left[0].size(), camera, options);
-  const int cols = 2 * options.patch_radius + 1, rows = 2 * options.patch_half_height + 1;
+  const int window = (2 * options.patch_radius + 1) * (2 * options.patch_half_height + 1);
   std::atomic<int> rescanned{0}, dropped{0};
   auto range_body = [&](const cv::Range& range) {
-    std::vector<std::uint8_t> support(static_cast<size_t>(rows) * cols);
+    std::vector<std::uint8_t> support(static_cast<size_t>(window));
     for (int j = range.start; j < range.end; ++j) {
       const int i = which[j];
       if (!(matches->depth[i] > 0)) continue;
       const cv::KeyPoint& kl = left.keypoints[i];
-      const int u0 = static_cast<int>(std::lround(kl.pt.x)), v0 = static_cast<int>(std::lround(kl.pt.y));
-      if (u0 < 0 || v0 < 0 || u0 >= instances.cols || v0 >= instances.rows) continue;
-      const int id = instances.at<int>(v0, u0);
+      const int id = instance_at(kl, instances);
       if (id <= 0) continue;
       const cv::Mat& L = pyramid_left[kl.octave];
-      const cv::Point2f pl = image_to_level(kl.pt, setup.size0, L.size());
-      const int xl = cvRound(pl.x), y = cvRound(pl.y);
-      int count = 0;
-      for (int r = 0; r < rows; ++r)
-        for (int c = 0; c < cols; ++c) {
-          // the window pixel's centre in the level-0 image (its instance there)
-          const cv::Point2f p0 = level_to_image(
-              cv::Point2f(static_cast<float>(xl - options.patch_radius + c),
-                          static_cast<float>(y - options.patch_half_height + r)),
-              setup.size0, L.size());
-          const int u = std::clamp(static_cast<int>(std::lround(p0.x)), 0, instances.cols - 1);
-          const int v = std::clamp(static_cast<int>(std::lround(p0.y)), 0, instances.rows - 1);
-          const bool own = instances.at<int>(v, u) == id;
-          support[static_cast<size_t>(r) * cols + c] = own;
-          count += own;
-        }
-      if (count == rows * cols) continue;  // the window lies on the object: its depth stands
-      if (count < min_support_fraction * static_cast<float>(rows * cols)) continue;
+      const int count = instance_support(kl, L, setup, options, instances, id, support.data());
+      if (count == window) continue;  // the window lies on the object: its depth stands
+      if (count < min_support_fraction * static_cast<float>(window)) continue;
       ++rescanned;
       if (!scan_depth(kl, L, pyramid_right[kl.octave], setup, options, support.data(),
                       &matches->u_right[i], &matches->depth[i])) {
+        matches->u_right[i] = -1.0f;
+        matches->depth[i] = -1.0f;
+        ++dropped;
+      }
+    }
+  };
+  cv::parallel_for_(cv::Range(0, static_cast<int>(which.size())), range_body, 2.0);
+  return {rescanned.load(), dropped.load()};
+}
+
+InstanceSupportReport drop_matches_pulled_nearer(
+    const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
+    const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
+    const StereoSearchOptions& options, const std::vector<int>& which, const cv::Mat& instances,
+    float min_support_fraction, float min_depth, float max_pull_px, StereoMatches* matches) {
+  check_arguments("drop_matches_pulled_nearer", left, pyramid_left, pyramid_right, camera, options,
+                  which, *matches);
+  check_instances("drop_matches_pulled_nearer", instances, pyramid_left[0].size(), min_support_fraction);
+  if (!(max_pull_px >= 0)) throw std::invalid_argument("drop_matches_pulled_nearer: max_pull_px must be >= 0");
+  const ScanSetup setup = scan_setup(pyramid_left[0].size(), camera, options);
+  const int window = (2 * options.patch_radius + 1) * (2 * options.patch_half_height + 1);
+  std::atomic<int> rescanned{0}, dropped{0};
+  auto range_body = [&](const cv::Range& range) {
+    std::vector<std::uint8_t> support(static_cast<size_t>(window));
+    for (int j = range.start; j < range.end; ++j) {
+      const int i = which[j];
+      if (!(matches->depth[i] >= min_depth)) continue;
+      const cv::KeyPoint& kl = left.keypoints[i];
+      const int id = instance_at(kl, instances);
+      if (id <= 0) continue;
+      const cv::Mat& L = pyramid_left[kl.octave];
+      bool beside_other = false;
+      const int count =
+          instance_support(kl, L, setup, options, instances, id, support.data(), &beside_other);
+      if (!beside_other || count < min_support_fraction * static_cast<float>(window)) continue;
+      ++rescanned;
+      float u_own = -1.0f, depth_own = -1.0f;
+      if (!scan_depth(kl, L, pyramid_right[kl.octave], setup, options, support.data(), &u_own,
+                      &depth_own))
+        continue;  // the object's pixels alone do not match: no evidence against the match
+      // disparities (level-0 px): the match's and the object pixels' own
+      if ((kl.pt.x - matches->u_right[i]) - (kl.pt.x - u_own) > max_pull_px) {
         matches->u_right[i] = -1.0f;
         matches->depth[i] = -1.0f;
         ++dropped;

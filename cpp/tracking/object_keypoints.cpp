@@ -154,7 +154,10 @@ ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& mai
       left_right_check_(options.left_right_check),
       left_right_tolerance_px_(static_cast<float>(options.left_right_tolerance_px)),
       instance_pixel_stereo_(options.instance_pixel_stereo),
-      instance_pixel_min_fraction_(static_cast<float>(options.instance_pixel_min_fraction)) {
+      instance_pixel_min_fraction_(static_cast<float>(options.instance_pixel_min_fraction)),
+      pulled_nearer_check_(options.pulled_nearer_check),
+      pulled_nearer_min_depth_m_(static_cast<float>(options.pulled_nearer_min_depth_m)),
+      pulled_nearer_max_px_(static_cast<float>(options.pulled_nearer_max_px)) {
   search_ = object_stereo_search(options);
 }
 
@@ -233,6 +236,13 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
     report.num_instance_rescanned = support.num_rescanned;
     report.num_instance_dropped = support.num_dropped;
   }
+  if (pulled_nearer_check_ && !instances.empty())
+    report.num_pulled_nearer_dropped =
+        features::drop_matches_pulled_nearer(left, pyr_left, f->right.pyramid, camera, search_,
+                                             on_objects, instances, instance_pixel_min_fraction_,
+                                             pulled_nearer_min_depth_m_, pulled_nearer_max_px_,
+                                             &f->matches)
+            .num_dropped;
   if (left_right_check_)
     report.num_left_right_removed =
         features::check_left_right(left, pyr_left, f->right.pyramid, camera, search_, on_objects,

@@ -24,6 +24,7 @@ struct ObjectKeypointReport {
   int num_left_right_removed = 0;  // object keypoints whose depth failed the left-right check
   int num_instance_rescanned = 0;  // edge keypoints whose depth was searched on their instance
   int num_instance_dropped = 0;    // ... and found none there
+  int num_pulled_nearer_dropped = 0;  // far vehicle keypoints a nearer occluder pulled (dropped)
 };
 
 // CV_8UC1 mask, 255 on pixels of an instance (instances > 0) whose class (labels; any class
@@ -55,7 +56,9 @@ class ObjectKeypointExtractor {
   // pyramids of extract_and_match. Keypoints at index >= the old size are the new ones.
   // instances (empty, or CV_32SC1 ids of the image size; <= 0: none): an instance whose mask
   // then holds fewer than extra_min_instance_keypoints keypoints gets a second pass on its own
-  // mask, when it covers at least extra_min_instance_area_px pixels.
+  // mask, when it covers at least extra_min_instance_area_px pixels; with pulled_nearer_check,
+  // those instances' far keypoints that a nearer occluder pulled lose their depth
+  // (features::drop_matches_pulled_nearer).
   ObjectKeypointReport extract(const cv::Mat& gray_left, const cv::Mat& object_mask,
                                const geometry::StereoCamera& camera,
                                features::StereoFeatures* features,
@@ -72,6 +75,9 @@ class ObjectKeypointExtractor {
   float left_right_tolerance_px_;
   bool instance_pixel_stereo_;
   float instance_pixel_min_fraction_;
+  bool pulled_nearer_check_;
+  float pulled_nearer_min_depth_m_;
+  float pulled_nearer_max_px_;
 };
 
 }  // namespace twistslam::tracking

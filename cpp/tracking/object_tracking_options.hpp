@@ -142,6 +142,13 @@ struct ObjectTrackingOptions {
   bool instance_pixel_stereo = true;
   std::vector<int> instance_pixel_class_ids{24, 25};
   double instance_pixel_min_fraction = 0.3;
+  // vehicle keypoints at least pulled_nearer_min_depth_m away whose window covers another
+  // vehicle lose their depth when their own vehicle's pixels alone match more than
+  // pulled_nearer_max_px (level-0 px) farther: the nearer vehicle's texture made the match
+  // (features::drop_matches_pulled_nearer; window share: instance_pixel_min_fraction)
+  bool pulled_nearer_check = true;
+  double pulled_nearer_min_depth_m = 35.0;
+  double pulled_nearer_max_px = 0.5;
 };
 
 template <typename Visit>
@@ -234,6 +241,9 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("instance_pixel_stereo", o.instance_pixel_stereo, 0, 1);
   visit("instance_pixel_class_ids", o.instance_pixel_class_ids, 0, 65535);
   visit("instance_pixel_min_fraction", o.instance_pixel_min_fraction, 0.0, 1.0);
+  visit("pulled_nearer_check", o.pulled_nearer_check, 0, 1);
+  visit("pulled_nearer_min_depth_m", o.pulled_nearer_min_depth_m, 0.0, 10000.0);
+  visit("pulled_nearer_max_px", o.pulled_nearer_max_px, 0.0, 1000.0);
 }
 
 }  // namespace twistslam::tracking

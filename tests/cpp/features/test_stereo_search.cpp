@@ -625,3 +625,139 @@ TEST(SearchPixelStereo, BadImagesThrow) {
   EXPECT_THROW(search_pixel_stereo(s.left, s.right, s.cam, bad, 100, 100, nullptr, &u_right, &depth),
                std::invalid_argument);
 }
+
+namespace {
+
+// A weakly textured far car (a plane at 45 m, 2 m wide) with a strongly textured nearer car at
+// 25 m just left of it in the image and a textured wall at 60 m behind: windows on the far
+// car's left edge hold the nearer car's texture, which outweighs its own; windows on its right
+// edge hold the wall's. (The nearer car is on the left so that the right camera still sees the
+// far car's edge: on its right it would hide it there.) The far car is instance 5, the nearer
+// one instance 9, the wall no instance.
+struct FarCarScene {
+  geometry::StereoCamera cam = test::kitti_camera();
+  cv::Mat left, right, instances;
+  std::vector<cv::Mat> pyramid_left, pyramid_right;
+  Keypoints near_car_edge, wall_edge, middle;
+  static constexpr double kCarDepth = 45.0, kNearCarDepth = 25.0;
+
+  FarCarScene() {
+    // the nearer car's right edge on the car's left edge seen from the left camera
+    const double near_x1 = -1.0 * kNearCarDepth / kCarDepth;
+    std::vector<test::Plane> planes = {test::make_plane(kCarDepth, -1.0, -1.5, 1.0, 1.5, 1.3, cam.fx, 51),
+                                       test::make_plane(kNearCarDepth, near_x1 - 1.0, -3.0, near_x1, 3.0, 1.3, cam.fx, 52),
+                                       test::make_plane(60.0, -30, -10, 30, 10, 1.3, cam.fx, 53)};
+    planes[0].texture = (planes[0].texture - 128.0) * 0.15 + 128.0;  // weak texture (std 6)
+    cv::Mat ids_left, ids_right;
+    left = test::render(planes, cam, false, &ids_left, 1.0, 420);
+    right = test::render(planes, cam, true, &ids_right, 1.0, 421);
+    instances = cv::Mat::zeros(ids_left.size(), CV_32SC1);
+    instances.setTo(5, ids_left == 0);
+    instances.setTo(9, ids_left == 1);
+    pyramid_left = build_pyramid(left, 1.2f, 2);
+    pyramid_right = build_pyramid(right, 1.2f, 2);
+    auto at = [](double u, int row) {
+      return cv::KeyPoint(cv::Point2f(static_cast<float>(u), static_cast<float>(row)), 31.0f, 0.0f, 1.0f, 0);
+    };
+    for (int v = 3; v + 3 < left.rows; v += 2) {
+      int first = -1, last = -1;
+      for (int u = 0; u < left.cols; ++u)
+        if (ids_left.at<int>(v, u) == 0) (first < 0 ? first : last) = u, last = u;
+      // rows whose windows lie within the car's height
+      if (first < 0 || ids_left.at<int>(v - 3, first + 1) != 0 || ids_left.at<int>(v + 3, first + 1) != 0 ||
+          ids_left.at<int>(v - 3, last - 1) != 0 || ids_left.at<int>(v + 3, last - 1) != 0)
+        continue;
+      near_car_edge.keypoints.push_back(at(first + 3, v));
+      wall_edge.keypoints.push_back(at(last - 2, v));
+      middle.keypoints.push_back(at(0.5 * (first + last), v));
+    }
+  }
+
+  // every keypoint given the depth `depth`
+  StereoMatches at_depth(const Keypoints& k, double depth) const {
+    StereoMatches m = unmatched(k.size());
+    for (size_t i = 0; i < k.size(); ++i) {
+      m.depth[i] = static_cast<float>(depth);
+      m.u_right[i] = k.keypoints[i].pt.x - static_cast<float>(cam.fx * cam.baseline / depth);
+    }
+    return m;
+  }
+};
+
+std::vector<int> every_index(size_t n) {
+  std::vector<int> all(n);
+  for (size_t i = 0; i < n; ++i) all[i] = static_cast<int>(i);
+  return all;
+}
+
+}  // namespace
+
+TEST(DropMatchesPulledNearer, FarCarEdgeMatchesTakenByANearerCarAreDropped) {
+  const FarCarScene s;
+  const int n = static_cast<int>(s.near_car_edge.size());
+  ASSERT_GE(n, 12);
+  const std::vector<int> all = every_index(n);
+  const StereoSearchOptions options;
+  // the whole window's scan gives the car's depth to few of the keypoints beside the nearer car
+  // (the scene does what it is for: most are rejected, some take the nearer car's depth)
+  StereoMatches whole = unmatched(n);
+  search_stereo(s.near_car_edge, s.pyramid_left, s.pyramid_right, s.cam, options, all, &whole);
+  int at_car = 0, at_near = 0;
+  for (int i = 0; i < n; ++i) {
+    at_car += std::abs(whole.depth[i] - FarCarScene::kCarDepth) < 0.02 * FarCarScene::kCarDepth;
+    at_near += std::abs(whole.depth[i] - FarCarScene::kNearCarDepth) < 0.05 * FarCarScene::kNearCarDepth;
+  }
+  EXPECT_LT(at_car, n / 4);
+  EXPECT_GT(at_near, 0);
+  // every such keypoint given the nearer car's depth: dropped, its own pixels match farther
+  StereoMatches m = s.at_depth(s.near_car_edge, FarCarScene::kNearCarDepth);
+  InstanceSupportReport r = drop_matches_pulled_nearer(s.near_car_edge, s.pyramid_left, s.pyramid_right,
+                                                       s.cam, options, all, s.instances, 0.3f,
+                                                       20.0f, 0.5f, &m);
+  std::cout << "edge beside the nearer car: " << at_car << " / " << at_near << " of " << n << " at the far / nearer car's depth; " << r.num_rescanned
+            << " scanned on the car's pixels, " << r.num_dropped << " dropped\n";
+  EXPECT_EQ(r.num_rescanned, n);
+  EXPECT_GE(r.num_dropped, n * 3 / 4);
+  for (int i = 0; i < n; ++i) EXPECT_TRUE(m.depth[i] < 0 || m.depth[i] == FarCarScene::kNearCarDepth);
+  // nearer than min_depth: not checked
+  StereoMatches near = s.at_depth(s.near_car_edge, FarCarScene::kNearCarDepth);
+  r = drop_matches_pulled_nearer(s.near_car_edge, s.pyramid_left, s.pyramid_right, s.cam, options, all,
+                                 s.instances, 0.3f, 30.0f, 0.5f, &near);
+  EXPECT_EQ(r.num_rescanned, 0);
+  EXPECT_EQ(near.depth, s.at_depth(s.near_car_edge, FarCarScene::kNearCarDepth).depth);
+}
+
+TEST(DropMatchesPulledNearer, MatchesAtTheirDepthOrFartherAndWindowsBesideNoOtherInstanceAreKept) {
+  const FarCarScene s;
+  const StereoSearchOptions options;
+  const std::vector<int> all = every_index(s.near_car_edge.size());
+  // the car's true depth beside the nearer car: kept (its own pixels agree within 0.5 px)
+  StereoMatches m = s.at_depth(s.near_car_edge, FarCarScene::kCarDepth);
+  InstanceSupportReport r = drop_matches_pulled_nearer(s.near_car_edge, s.pyramid_left, s.pyramid_right,
+                                                       s.cam, options, all, s.instances, 0.3f,
+                                                       20.0f, 0.5f, &m);
+  EXPECT_EQ(r.num_rescanned, static_cast<int>(s.near_car_edge.size()));
+  EXPECT_LE(r.num_dropped, static_cast<int>(s.near_car_edge.size()) / 10);
+  // a farther match (the wall's depth) there: not the check's business, kept
+  StereoMatches far = s.at_depth(s.near_car_edge, 60.0);
+  r = drop_matches_pulled_nearer(s.near_car_edge, s.pyramid_left, s.pyramid_right, s.cam, options, all,
+                                 s.instances, 0.3f, 20.0f, 0.5f, &far);
+  EXPECT_EQ(r.num_dropped, 0);
+  // windows beside the wall (no instance) or wholly on the car are not scanned, whatever their
+  // depth
+  for (const Keypoints* k : {&s.wall_edge, &s.middle}) {
+    StereoMatches near = s.at_depth(*k, FarCarScene::kNearCarDepth);
+    r = drop_matches_pulled_nearer(*k, s.pyramid_left, s.pyramid_right, s.cam, options,
+                                   every_index(k->size()), s.instances, 0.3f, 20.0f, 0.5f, &near);
+    EXPECT_EQ(r.num_rescanned, 0);
+    EXPECT_EQ(near.depth, s.at_depth(*k, FarCarScene::kNearCarDepth).depth);
+  }
+  // bad input
+  EXPECT_THROW(drop_matches_pulled_nearer(s.near_car_edge, s.pyramid_left, s.pyramid_right, s.cam, options,
+                                          all, s.instances, 0.3f, 20.0f, -1.0f, &m),
+               std::invalid_argument);
+  EXPECT_THROW(drop_matches_pulled_nearer(s.near_car_edge, s.pyramid_left, s.pyramid_right, s.cam, options,
+                                          all, cv::Mat(s.instances.size(), CV_8UC1), 0.3f, 20.0f, 0.5f, &m),
+               std::invalid_argument);
+}
+
