@@ -144,7 +144,7 @@ namespace {
 
 // The window pixels of keypoint kl (on level L) that lie on instance `id` at level 0: support
 // (row-major, 1 = on it); returns their count. *beside_other (when given): whether a pixel of
-// the window lies on another instance.
+// the window lies on another instance or on a marked occluder (a negative id).
 int instance_support(const cv::KeyPoint& kl, const cv::Mat& L, const ScanSetup& setup,
                      const StereoSearchOptions& options, const cv::Mat& instances, int id,
                      std::uint8_t* support, bool* beside_other = nullptr) {
@@ -165,7 +165,7 @@ int instance_support(const cv::KeyPoint& kl, const cv::Mat& L, const ScanSetup& 
       const bool own = here == id;
       support[static_cast<size_t>(r) * cols + c] = own;
       count += own;
-      if (beside_other != nullptr && here > 0 && !own) *beside_other = true;
+      if (beside_other != nullptr && here != 0 && !own) *beside_other = true;
     }
   return count;
 }

@@ -135,6 +135,19 @@ cv::Mat instances_of_classes(const cv::Mat& instances, const cv::Mat& labels,
   return out;
 }
 
+void mark_occluder_classes(const cv::Mat& labels, const std::vector<int>& class_ids, cv::Mat* ids) {
+  if (ids->type() != CV_32SC1 || labels.type() != CV_32SC1 || labels.size() != ids->size())
+    throw std::invalid_argument("mark_occluder_classes: expected int32 labels and ids of one size");
+  const std::unordered_set<int> occluders(class_ids.begin(), class_ids.end());
+  if (occluders.empty()) return;
+  for (int v = 0; v < ids->rows; ++v) {
+    const int* cls = labels.ptr<int>(v);
+    int* id = ids->ptr<int>(v);
+    for (int u = 0; u < ids->cols; ++u)
+      if (id[u] <= 0 && occluders.count(cls[u])) id[u] = kOccluderId;
+  }
+}
+
 features::StereoSearchOptions object_stereo_search(const ObjectTrackingOptions& options) {
   features::StereoSearchOptions search;
   search.min_depth = static_cast<float>(options.extra_min_depth_m);

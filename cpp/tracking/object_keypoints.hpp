@@ -37,6 +37,12 @@ cv::Mat object_class_mask(const cv::Mat& instances, const cv::Mat& labels,
 cv::Mat instances_of_classes(const cv::Mat& instances, const cv::Mat& labels,
                              const std::vector<int>& class_ids);
 
+// Sets ids (CV_32SC1) to kOccluderId where labels (CV_32SC1, one size) hold one of class_ids
+// and ids hold no instance (<= 0): the thin things (poles, tree trunks) that stand in front of
+// far cars, for the pulled-nearer check; negative ids count as no instance elsewhere.
+inline constexpr int kOccluderId = -2;
+void mark_occluder_classes(const cv::Mat& labels, const std::vector<int>& class_ids, cv::Mat* ids);
+
 // The SAD scan's options for object pixels (extra keypoints, flow-located points): the object
 // depth range and the extra keypoints' cost and uniqueness bounds.
 features::StereoSearchOptions object_stereo_search(const ObjectTrackingOptions& options);

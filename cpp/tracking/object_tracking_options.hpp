@@ -149,6 +149,9 @@ struct ObjectTrackingOptions {
   bool pulled_nearer_check = true;
   double pulled_nearer_min_depth_m = 35.0;
   double pulled_nearer_max_px = 0.5;
+  // the stuff classes that count as another object beside a keypoint too (Cityscapes pole,
+  // traffic light, traffic sign, vegetation: tree trunks and posts in front of parked cars)
+  std::vector<int> pulled_nearer_occluder_class_ids{17, 19, 20, 21};
 };
 
 template <typename Visit>
@@ -244,6 +247,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("pulled_nearer_check", o.pulled_nearer_check, 0, 1);
   visit("pulled_nearer_min_depth_m", o.pulled_nearer_min_depth_m, 0.0, 10000.0);
   visit("pulled_nearer_max_px", o.pulled_nearer_max_px, 0.0, 1000.0);
+  visit("pulled_nearer_occluder_class_ids", o.pulled_nearer_occluder_class_ids, 0, 65535);
 }
 
 }  // namespace twistslam::tracking

@@ -81,6 +81,8 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
         // vehicles only (second pass, pulled-nearer check): a pedestrian's extra points seeded a
         // ghost (crowded seed 0, classical)
         vehicle_instances = instances_of_classes(instances, labels, vo.planar_class_ids);
+        if (vo.pulled_nearer_check && !labels.empty())
+          mark_occluder_classes(labels, vo.pulled_nearer_occluder_class_ids, &vehicle_instances);
       }
       if (vo.instance_pixel_stereo && !vo.instance_pixel_class_ids.empty())
         thin_instances = instances_of_classes(instances, labels, vo.instance_pixel_class_ids);

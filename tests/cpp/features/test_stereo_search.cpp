@@ -752,6 +752,15 @@ TEST(DropMatchesPulledNearer, MatchesAtTheirDepthOrFartherAndWindowsBesideNoOthe
     EXPECT_EQ(r.num_rescanned, 0);
     EXPECT_EQ(near.depth, s.at_depth(*k, FarCarScene::kNearCarDepth).depth);
   }
+  // a marked occluder (a negative id: a tree trunk's pixels) beside the window counts as another
+  // object: the wall's edge is then scanned, and its true depth kept
+  cv::Mat marked = s.instances.clone();
+  marked.setTo(-2, s.instances == 0);
+  StereoMatches wall = s.at_depth(s.wall_edge, FarCarScene::kCarDepth);
+  r = drop_matches_pulled_nearer(s.wall_edge, s.pyramid_left, s.pyramid_right, s.cam, options,
+                                 every_index(s.wall_edge.size()), marked, 0.3f, 20.0f, 0.5f, &wall);
+  EXPECT_EQ(r.num_rescanned, static_cast<int>(s.wall_edge.size()));
+  EXPECT_LE(r.num_dropped, static_cast<int>(s.wall_edge.size()) / 10);
   // bad input
   EXPECT_THROW(drop_matches_pulled_nearer(s.near_car_edge, s.pyramid_left, s.pyramid_right, s.cam, options,
                                           all, s.instances, 0.3f, 20.0f, -1.0f, &m),

@@ -67,6 +67,29 @@ TEST(InstancesOfClasses, KeepsTheIdsOfTheListedClassesOnly) {
   }
 }
 
+TEST(MarkOccluderClasses, MarksTheListedStuffClassesWhereThereIsNoInstance) {
+  // a car (instance 3, class 26), a tree trunk (vegetation 21), a pole (17), road (7), and a
+  // vegetation-labelled pixel under an instance id (kept: the instance wins)
+  cv::Mat ids = cv::Mat::zeros(1, 5, CV_32SC1), labels = cv::Mat::zeros(1, 5, CV_32SC1);
+  const int inst[5] = {3, 0, 0, 0, 4}, classes[5] = {26, 21, 17, 7, 21};
+  for (int u = 0; u < 5; ++u) ids.at<int>(0, u) = inst[u], labels.at<int>(0, u) = classes[u];
+  tracking::mark_occluder_classes(labels, {17, 21}, &ids);
+  EXPECT_EQ(ids.at<int>(0, 0), 3);
+  EXPECT_EQ(ids.at<int>(0, 1), tracking::kOccluderId);
+  EXPECT_EQ(ids.at<int>(0, 2), tracking::kOccluderId);
+  EXPECT_EQ(ids.at<int>(0, 3), 0);
+  EXPECT_EQ(ids.at<int>(0, 4), 4);
+  EXPECT_LT(tracking::kOccluderId, 0);  // no instance for the second pass and the id lookups
+  // no classes: nothing changes; wrong types or sizes throw
+  cv::Mat untouched = cv::Mat::zeros(1, 5, CV_32SC1);
+  tracking::mark_occluder_classes(labels, {}, &untouched);
+  EXPECT_EQ(cv::countNonZero(untouched), 0);
+  cv::Mat wrong_type = cv::Mat::zeros(1, 5, CV_8UC1);
+  EXPECT_THROW(tracking::mark_occluder_classes(labels, {21}, &wrong_type), std::invalid_argument);
+  EXPECT_THROW(tracking::mark_occluder_classes(labels(cv::Rect(0, 0, 4, 1)), {21}, &untouched),
+               std::invalid_argument);
+}
+
 TEST(ObjectClassMask, WrongTypesOrSizesThrow) {
   const cv::Mat instances = cv::Mat::ones(4, 5, CV_32SC1), labels = cv::Mat::ones(4, 5, CV_32SC1);
   for (const cv::Mat& bad : {cv::Mat(cv::Mat::ones(4, 5, CV_8UC1)), cv::Mat(cv::Mat::ones(4, 5, CV_16SC1))})
