@@ -188,6 +188,38 @@ void check_instances(const char* who, const cv::Mat& instances, const cv::Size& 
 
 }  // namespace
 
+// For each keypoint of `which` whose match passes `has_depth`, on an instance, whose window
+// covers pixels other than its instance's (with `need_other_instance`: another instance or a
+// marked occluder) and at least min_support_fraction of its own: visit(i, kl, L, support)
+// with the window's pixels on its instance, in parallel. The two users' shared walk.
+template <class HasDepth, class Visit>
+void for_each_partial_window(const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
+                             const ScanSetup& setup, const StereoSearchOptions& options,
+                             const std::vector<int>& which, const cv::Mat& instances,
+                             float min_support_fraction, bool need_other_instance,
+                             HasDepth has_depth, Visit visit) {
+  const int window = (2 * options.patch_radius + 1) * (2 * options.patch_half_height + 1);
+  auto range_body = [&](const cv::Range& range) {
+    std::vector<std::uint8_t> support(static_cast<size_t>(window));
+    for (int j = range.start; j < range.end; ++j) {
+      const int i = which[j];
+      if (!has_depth(i)) continue;
+      const cv::KeyPoint& kl = left.keypoints[i];
+      const int id = instance_at(kl, instances);
+      if (id <= 0) continue;
+      const cv::Mat& L = pyramid_left[kl.octave];
+      bool beside_other = false;
+      const int count = instance_support(kl, L, setup, options, instances, id, support.data(),
+                                         &beside_other);
+      if (count == window) continue;  // the window lies on the object: its depth stands
+      if (need_other_instance && !beside_other) continue;
+      if (count < min_support_fraction * static_cast<float>(window)) continue;
+      visit(i, kl, L, support.data());
+    }
+  };
+  cv::parallel_for_(cv::Range(0, static_cast<int>(which.size())), range_body, 2.0);
+}
+
 InstanceSupportReport depth_on_instance_pixels(
     const Keypoints& left, const std::vector<cv::Mat>& pyramid_left,
     const std::vector<cv::Mat>& pyramid_right, const geometry::StereoCamera& camera,
@@ -197,30 +229,19 @@ InstanceSupportReport depth_on_instance_pixels(
                   which, *matches);
   check_instances("depth_on_instance_pixels", instances, pyramid_left[0].size(), min_support_fraction);
   const ScanSetup setup = scan_setup(pyramid_left[0].size(), camera, options);
-  const int window = (2 * options.patch_radius + 1) * (2 * options.patch_half_height + 1);
   std::atomic<int> rescanned{0}, dropped{0};
-  auto range_body = [&](const cv::Range& range) {
-    std::vector<std::uint8_t> support(static_cast<size_t>(window));
-    for (int j = range.start; j < range.end; ++j) {
-      const int i = which[j];
-      if (!(matches->depth[i] > 0)) continue;
-      const cv::KeyPoint& kl = left.keypoints[i];
-      const int id = instance_at(kl, instances);
-      if (id <= 0) continue;
-      const cv::Mat& L = pyramid_left[kl.octave];
-      const int count = instance_support(kl, L, setup, options, instances, id, support.data());
-      if (count == window) continue;  // the window lies on the object: its depth stands
-      if (count < min_support_fraction * static_cast<float>(window)) continue;
-      ++rescanned;
-      if (!scan_depth(kl, L, pyramid_right[kl.octave], setup, options, support.data(),
-                      &matches->u_right[i], &matches->depth[i])) {
-        matches->u_right[i] = -1.0f;
-        matches->depth[i] = -1.0f;
-        ++dropped;
-      }
-    }
-  };
-  cv::parallel_for_(cv::Range(0, static_cast<int>(which.size())), range_body, 2.0);
+  for_each_partial_window(
+      left, pyramid_left, setup, options, which, instances, min_support_fraction,
+      /*need_other_instance=*/false, [&](int i) { return matches->depth[i] > 0; },
+      [&](int i, const cv::KeyPoint& kl, const cv::Mat& L, const std::uint8_t* support) {
+        ++rescanned;
+        if (!scan_depth(kl, L, pyramid_right[kl.octave], setup, options, support,
+                        &matches->u_right[i], &matches->depth[i])) {
+          matches->u_right[i] = -1.0f;
+          matches->depth[i] = -1.0f;
+          ++dropped;
+        }
+      });
   return {rescanned.load(), dropped.load()};
 }
 
@@ -234,35 +255,23 @@ InstanceSupportReport drop_matches_pulled_nearer(
   check_instances("drop_matches_pulled_nearer", instances, pyramid_left[0].size(), min_support_fraction);
   if (!(max_pull_px >= 0)) throw std::invalid_argument("drop_matches_pulled_nearer: max_pull_px must be >= 0");
   const ScanSetup setup = scan_setup(pyramid_left[0].size(), camera, options);
-  const int window = (2 * options.patch_radius + 1) * (2 * options.patch_half_height + 1);
   std::atomic<int> rescanned{0}, dropped{0};
-  auto range_body = [&](const cv::Range& range) {
-    std::vector<std::uint8_t> support(static_cast<size_t>(window));
-    for (int j = range.start; j < range.end; ++j) {
-      const int i = which[j];
-      if (!(matches->depth[i] >= min_depth)) continue;
-      const cv::KeyPoint& kl = left.keypoints[i];
-      const int id = instance_at(kl, instances);
-      if (id <= 0) continue;
-      const cv::Mat& L = pyramid_left[kl.octave];
-      bool beside_other = false;
-      const int count =
-          instance_support(kl, L, setup, options, instances, id, support.data(), &beside_other);
-      if (!beside_other || count < min_support_fraction * static_cast<float>(window)) continue;
-      ++rescanned;
-      float u_own = -1.0f, depth_own = -1.0f;
-      if (!scan_depth(kl, L, pyramid_right[kl.octave], setup, options, support.data(), &u_own,
-                      &depth_own))
-        continue;  // the object's pixels alone do not match: no evidence against the match
-      // disparities (level-0 px): the match's and the object pixels' own
-      if ((kl.pt.x - matches->u_right[i]) - (kl.pt.x - u_own) > max_pull_px) {
-        matches->u_right[i] = -1.0f;
-        matches->depth[i] = -1.0f;
-        ++dropped;
-      }
-    }
-  };
-  cv::parallel_for_(cv::Range(0, static_cast<int>(which.size())), range_body, 2.0);
+  for_each_partial_window(
+      left, pyramid_left, setup, options, which, instances, min_support_fraction,
+      /*need_other_instance=*/true, [&](int i) { return matches->depth[i] >= min_depth; },
+      [&](int i, const cv::KeyPoint& kl, const cv::Mat& L, const std::uint8_t* support) {
+        ++rescanned;
+        float u_own = -1.0f, depth_own = -1.0f;
+        if (!scan_depth(kl, L, pyramid_right[kl.octave], setup, options, support, &u_own,
+                        &depth_own))
+          return;  // the object's pixels alone do not match: no evidence against the match
+        // disparities (level-0 px): the match's and the object pixels' own
+        if ((kl.pt.x - matches->u_right[i]) - (kl.pt.x - u_own) > max_pull_px) {
+          matches->u_right[i] = -1.0f;
+          matches->depth[i] = -1.0f;
+          ++dropped;
+        }
+      });
   return {rescanned.load(), dropped.load()};
 }
 
