@@ -252,8 +252,16 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
   const bool never_tracked = track.hits < 2;
   const double report_max_depth = contact_seeded ? options_.untracked_contact_report_max_depth_m
                                                  : options_.untracked_report_max_depth_m;
+  bool consistent = true;
+  if (never_tracked && reseeded && options_.untracked_reseed_max_jump_m > 0) {
+    const objects::TrackFrame& previous = track.last();
+    const int apart = std::max(1, frame.index - previous.frame);
+    consistent = (row.T_w_o.topRightCorner<3, 1>() - previous.T_w_o.topRightCorner<3, 1>()).norm() <=
+                 options_.untracked_reseed_max_jump_m * apart;
+  }
   const bool reseed_reported =
-      reseeded && (!never_tracked || (frame.T_c_w * row.T_w_o)(2, 3) <= report_max_depth);
+      reseeded && consistent &&
+      (!never_tracked || (frame.T_c_w * row.T_w_o)(2, 3) <= report_max_depth);
   row.reported = valid || reseed_reported || box_kept;
   row.T_c_w = frame.T_c_w;
   track.frames.push_back(row);

@@ -70,6 +70,10 @@ struct ObjectTrackingOptions {
   double untracked_report_max_depth_m = 45;
   // ... and those its ground contact placed only this near (m; config.py says why)
   double untracked_contact_report_max_depth_m = 45;
+  // ... and only when it lies within this (m per frame apart) of the cluster's previous row
+  // (0: no test): consecutive re-seeds of one car that jump farther place it on different
+  // surfaces (config.py says why)
+  double untracked_reseed_max_jump_m = 3.5;
   // tracks of these classes (people) report rows without a box of their own only this near (m)
   std::vector<int> small_object_class_ids{24, 25};
   double small_object_report_max_depth_m = 35;
@@ -195,6 +199,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("reseed_after_misses", o.reseed_after_misses, 0, 100000);
   visit("untracked_report_max_depth_m", o.untracked_report_max_depth_m, 0.0, 10000.0);
   visit("untracked_contact_report_max_depth_m", o.untracked_contact_report_max_depth_m, 0.0, 10000.0);
+  visit("untracked_reseed_max_jump_m", o.untracked_reseed_max_jump_m, 0.0, 10000.0);
   visit("small_object_class_ids", o.small_object_class_ids, 0, 65535);
   visit("small_object_report_max_depth_m", o.small_object_report_max_depth_m, 0.0, 10000.0);
   visit("max_point_spread_m", o.max_point_spread_m, 0.1, 1000.0);

@@ -226,6 +226,15 @@ class VisualObjectsConfig:
         "45 (as any re-seeded row) is off; measured on 22 simulated sequences + 4 unseen: 35 m "
         "and 40 m each removed urban s8's ghost (files) but lost 1-2 cars per flow (urban s0 "
         "DIS, urban s10 both) and unseen urban s15's car 14", "m", lo=0.0)
+    untracked_reseed_max_jump_m: float = param(
+        3.5, "... and only when it lies within this (per frame apart) of the cluster's previous "
+        "row (0: no test): consecutive one-frame placements of one car that far apart put it on "
+        "different surfaces (urban s8's ghost: ground-contact re-seeds at 42, 38, 37, 41 m of a "
+        "car at 36 m; unseen urban s17's: 43.7, 43.9, 39.1, 36.2 m of a car at 37-39 m). 28 "
+        "simulated sequences x 2 flows: ghosts 4 -> 1 (urban s8 files, urban s17 both flows "
+        "gone), cars >= 90 % 261 -> 259 of 264 (urban s10's car 9, 0.92 -> 0.89, both flows), "
+        "errors the same to 0.001; 2.0 m also lost urban s0's car 12 (DIS) and unseen urban "
+        "s15's car 16 (both)", "m", lo=0.0, hi=10000.0)
     small_object_class_ids: list[int] = param(
         [24, 25], "classes whose camera-only rows are reported only within "
         "small_object_report_max_depth_m (Cityscapes person, rider); []: none")

@@ -446,6 +446,31 @@ TEST_F(TrackerScene, AClusterNeverTrackedReportsItsReseededRowsOnlyWhenNear) {
   EXPECT_EQ(count_reported(run(50.0, any_range).tracks()[0]), 6);
 }
 
+// untracked_reseed_max_jump_m: a cluster never tracked is re-seeded every frame (its points
+// change descriptors); a parked car's re-seeds agree and are reported, those of a car whose
+// re-seeds land 5 m apart frame after frame (each frame's points on another surface, here the
+// car itself moving 5 m per frame) are not, with the test; without it both are.
+TEST_F(TrackerScene, ReseededRowsOfAClusterNeverTrackedThatJumpAreNotReported) {
+  auto count_reported = [&](const Vec3& velocity, double max_jump_m) {
+    tracking::ObjectTrackingOptions options;
+    options.untracked_reseed_max_jump_m = max_jump_m;
+    options.max_step_m = 10.0;  // the 5 m steps are no failed fit here
+    auto tracker = make_tracker(options);
+    run_reseeding_car(tracker, make_car(rng, Vec3(1.0, 0.9, 15), velocity, 0.0, 40), background,
+                      6, rng);
+    EXPECT_EQ(tracker.tracks().size(), 1u);
+    if (tracker.tracks().empty()) return -1;
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    EXPECT_EQ(track.hits, 1);  // never tracked
+    return static_cast<int>(std::count_if(track.frames.begin(), track.frames.end(),
+                                           [](const auto& r) { return r.reported; }));
+  };
+  ASSERT_EQ(tracking::ObjectTrackingOptions().untracked_reseed_max_jump_m, 3.5);
+  EXPECT_EQ(count_reported(Vec3::Zero(), 3.5), 6);           // parked: the re-seeds agree
+  EXPECT_EQ(count_reported(Vec3(0, 0, 5.0), 3.5), 1);        // 5 m apart: the birth row alone
+  EXPECT_EQ(count_reported(Vec3(0, 0, 5.0), 0.0), 6);        // no test
+}
+
 TEST_F(TrackerScene, PlanarClassStartsAClusterFromFewerPointsThanAFreeOne) {
   // 8 stereo points under one instance: between the planar minimum (6) and the free one (10)
   constexpr int kPerson = 24;  // an object class outside planar_class_ids: free link
