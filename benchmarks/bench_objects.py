@@ -44,9 +44,10 @@ boxes the output gives camera-only tracks), and the 3D TP rate and 3D MOTP
 ``twistslam eval``'s evaluator against ``label_02`` (moderate level, IoU 0.25), means over the
 same moving cars. At the end: issue 10's targets per row (the aligned errors averaged over
 the moving cars of all the sequences, the cars tracked in >= 90 % of their frames, the ghost
-tracks), each row's means over the sequences against issue 11's targets (met / missed), and the ablation ratio RPE_t det-reg / default (aligned RPE_t: the
-default row's cluster frames are not box frames) per sequence and on the means, and the same
-ratio on masks made from 3D boxes (boxes-det-reg / boxes-seg, classical-masks / classical-cam)
+tracks), each row's means over the sequences against issue 11's targets (met / missed), and the
+ablation ratio RPE_t det-reg / default (aligned RPE_t: the default row's cluster frames are not
+box frames) per sequence and on the means, the same with the classical detector's boxes
+(classical / default), and the same ratio on masks made from 3D boxes (boxes-det-reg / boxes-seg, classical-masks / classical-cam)
 when those rows ran;
 ``--targets`` also prints the targets line after every row.
 
@@ -152,6 +153,8 @@ ISSUE10_TARGETS = [("RPE_t", "rpe_t", 0.15, "m/m"), ("RPE_r", "rpe_r", 0.35, "de
 ABLATION_MAX_RATIO = 0.5
 #: the ablation's rows: keypoints only, and + detection + registration
 ABLATION_ROWS = ("default", "det-reg")
+#: the same with the classical LiDAR detector's boxes (the default without weights)
+CLASSICAL_ABLATION_ROWS = ("default", "classical")
 #: the same ablation where the masks come from 3D boxes (real KITTI has no panoptic files),
 #: both rows of a pair on the same masks: the oracle boxes', the classical detector's
 MASK_ABLATION_ROWS = (("boxes-seg", "boxes-det-reg"), ("classical-cam", "classical-masks"))
@@ -317,7 +320,7 @@ def print_summary(figures: dict[str, dict[str, dict]], rows: list[str],
                        if any(np.isfinite(f.get(key, np.nan)) for f in per_seq) else float("nan")
                        for key in ("rpe_t", *[t[1] for t in TARGETS])}
         print(f"  {name:<10} {targets_line(means[name])}")
-    for pair in (ABLATION_ROWS, *MASK_ABLATION_ROWS):
+    for pair in (ABLATION_ROWS, CLASSICAL_ABLATION_ROWS, *MASK_ABLATION_ROWS):
         if not all(name in rows for name in pair):
             continue
         print(f"ablation: RPE_t (aligned) {pair[1]} / {pair[0]}, target <= "

@@ -62,6 +62,17 @@ struct DetectorOptions {
   double cluster_gap_m = 0.6;
   // returns a cluster needs: below 10 no heading or size is measurable.
   int min_cluster_points = 10;
+  // m, a low cluster (below) within this of a larger cluster and inside its bearings joins it
+  // (a far car's bumper cut off by its hood's gap; fragment_merge.hpp); 0: off.
+  double fragment_merge_gap_m = 1.5;
+  // m, the vertical extent of a fragment's returns at most: a bumper and grille span ~0.2-0.8
+  // m above the road, a person (1.1 m and up) or a car body more.
+  double fragment_max_height_extent_m = 0.6;
+  // m, the nearest range of a fragment: nearer, the hood's (trunk's) lid is hit by rings too.
+  double fragment_min_range_m = 20.0;
+  // m, how much higher the top of the cluster a fragment joins must be (a car's cabin over its
+  // bumper: 0.5 m and more).
+  double fragment_min_rise_m = 0.3;
 
   // --- box fitting ---
   // m above the road up to which returns shape the footprint: car bodies are vertical up to
@@ -224,6 +235,10 @@ void for_each_option(DetectorOptions& o, Visit&& visit) {
   visit("cluster_cell_m", o.cluster_cell_m, 0.05, 5.0);  // the grid stays below ~16M cells
   visit("cluster_gap_m", o.cluster_gap_m, 0.0, 5.0);    // at most 100 cells of reach
   visit("min_cluster_points", o.min_cluster_points, 3, 1000000);  // 3: a fit needs a shape
+  visit("fragment_merge_gap_m", o.fragment_merge_gap_m, 0.0, 5.0);
+  visit("fragment_max_height_extent_m", o.fragment_max_height_extent_m, 0.0, 10.0);
+  visit("fragment_min_range_m", o.fragment_min_range_m, 0.0, 200.0);
+  visit("fragment_min_rise_m", o.fragment_min_rise_m, 0.0, 10.0);
   visit("footprint_max_height_m", o.footprint_max_height_m, 0.0, 20.0);
   visit("heading_step_deg", o.heading_step_deg, 0.1, 45.0);
   visit("closeness_floor_m", o.closeness_floor_m, 0.001, 1.0);

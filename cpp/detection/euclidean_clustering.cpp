@@ -1,5 +1,7 @@
 #include "detection/euclidean_clustering.hpp"
 
+#include "detection/fragment_merge.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -50,8 +52,9 @@ std::vector<std::vector<int>> cluster_bev(const std::vector<ScenePoint>& points,
         }
       }
     }
-    if (static_cast<int>(members.size()) >= o.min_cluster_points) clusters.push_back(std::move(members));
+    clusters.push_back(std::move(members));
   }
+  merge_face_fragments(points, &clusters, o);  // drops the fragments it does not join
   return clusters;
 }
 

@@ -12,7 +12,8 @@
 namespace twistslam::detection {
 
 // Clusters as lists of positions in `points`; clusters with fewer than min_cluster_points
-// returns are dropped. `is_obstacle[i]` selects the returns taking part.
+// returns are joined to a nearby cluster they face (fragment_merge.hpp) or dropped.
+// `is_obstacle[i]` selects the returns taking part.
 std::vector<std::vector<int>> cluster_bev(const std::vector<ScenePoint>& points,
                                           const std::vector<char>& is_obstacle,
                                           const DetectorOptions& options);
