@@ -9,6 +9,7 @@
 #include <string>
 
 #include "detection/detector.hpp"
+#include "detection_test_helpers.hpp"
 #include "synthetic_scene.hpp"
 
 using namespace twistslam;
@@ -34,27 +35,6 @@ std::vector<SceneBox> oncoming_car(double x, double front_z, double hood_m = 1.2
   cabin.lift = body.height;
   cabin.z = front_z + hood_m + 0.5 * cabin.length;
   return {body, cabin};
-}
-
-// The car detection nearest (BEV) to (x, z), or nullptr.
-const Detection* nearest_car(const DetectorResult& r, double x, double z) {
-  const Detection* best = nullptr;
-  for (const Detection& d : r.detections)
-    if (d.cls == ObjectClass::kCar &&
-        (!best || std::hypot(d.centre.x() - x, d.centre.z() - z) <
-                      std::hypot(best->centre.x() - x, best->centre.z() - z)))
-      best = &d;
-  return best;
-}
-
-// The detections as text, for failure messages.
-std::string describe(const DetectorResult& r) {
-  std::string out;
-  for (const Detection& d : r.detections)
-    out += std::string(to_string(d.cls)) + " x " + std::to_string(d.centre.x()) + " z " +
-           std::to_string(d.centre.z()) + " l " + std::to_string(d.length) + " w " +
-           std::to_string(d.width) + " n " + std::to_string(d.num_points) + "; ";
-  return out;
 }
 
 DetectorOptions without_merge() {

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "detection/detector.hpp"
+#include "detection_test_helpers.hpp"
 #include "synthetic_scene.hpp"
 
 using namespace twistslam;
@@ -15,29 +16,6 @@ using namespace twistslam::test_scenes;
 
 namespace {
 constexpr double kDeg = M_PI / 180.0;
-
-// The car detection nearest (BEV) to (x, z); fails the test if there is none.
-const Detection* nearest_car(const DetectorResult& r, double x, double z) {
-  const Detection* best = nullptr;
-  for (const Detection& d : r.detections) {
-    if (d.cls != ObjectClass::kCar) continue;
-    if (!best || std::hypot(d.centre.x() - x, d.centre.z() - z) <
-                     std::hypot(best->centre.x() - x, best->centre.z() - z))
-      best = &d;
-  }
-  EXPECT_NE(best, nullptr) << "no car detected near (" << x << ", " << z << ")";
-  return best;
-}
-
-// The detections as text, for failure messages.
-std::string describe(const DetectorResult& r) {
-  std::string out;
-  for (const Detection& d : r.detections)
-    out += std::string(to_string(d.cls)) + " x " + std::to_string(d.centre.x()) + " z " +
-           std::to_string(d.centre.z()) + " l " + std::to_string(d.length) + " w " +
-           std::to_string(d.width) + " yaw " + std::to_string(d.yaw / kDeg) + "; ";
-  return out;
-}
 
 // (along, across) of point (x, z) in the box frame of d: length axis (cos yaw, -sin yaw).
 void box_coordinates(const Detection& d, double x, double z, double* along, double* across) {

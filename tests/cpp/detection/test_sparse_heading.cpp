@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "detection/detector.hpp"
+#include "detection_test_helpers.hpp"
 #include "synthetic_scene.hpp"
 
 using namespace twistslam;
@@ -61,16 +62,6 @@ Points3 with_range_noise(Points3 points, unsigned seed) {
   return points;
 }
 
-// The car detection nearest (BEV) to (x, z), or nullptr.
-const Detection* nearest_car(const DetectorResult& r, double x, double z) {
-  const Detection* best = nullptr;
-  for (const Detection& d : r.detections)
-    if (d.cls == ObjectClass::kCar &&
-        (!best || std::hypot(d.centre.x() - x, d.centre.z() - z) <
-                      std::hypot(best->centre.x() - x, best->centre.z() - z)))
-      best = &d;
-  return best;
-}
 }  // namespace
 
 // A parked row ahead, right of the lane: the nearer car hides most of the far one's rear at
