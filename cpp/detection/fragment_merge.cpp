@@ -8,7 +8,7 @@ namespace twistslam::detection {
 
 namespace {
 
-// A kept cluster's bearing span in the bird's-eye view, as angles about its mean bearing (no
+// A cluster's bearing span in the bird's-eye view, as angles about its mean bearing (no
 // wrap-around at +-pi: a car spans a few degrees).
 struct BearingSpan {
   double dir_x = 0, dir_z = 1;  // unit mean bearing

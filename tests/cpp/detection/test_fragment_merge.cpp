@@ -85,8 +85,18 @@ TEST(FragmentMerge, ALowObjectBesideACarOrANearOneIsNotJoined) {
   EXPECT_NEAR(car->centre.x(), 1.0, 0.1);
   EXPECT_NEAR(car->centre.z() - 0.5 * car->length, 44.0, 0.15);  // its bumper did join
 
+  // fragments nearer than fragment_min_range_m stay out: with the range raised past the car
+  // the detections are those without the merge (here: the bumper-less body is no car)
+  DetectorOptions far_only;
+  far_only.fragment_min_range_m = 60.0;
+  const DetectorResult r_far_only = detect(scan, far_only), r_off = detect(scan, without_merge());
+  ASSERT_EQ(r_far_only.detections.size(), r_off.detections.size()) << describe(r_far_only);
+  ASSERT_LT(r_off.detections.size(), r.detections.size());  // the merge made the car here
+  for (std::size_t i = 0; i < r_off.detections.size(); ++i)
+    EXPECT_NEAR(r_far_only.detections[i].centre.z(), r_off.detections[i].centre.z(), 1e-9);
+
   // a near car (12 m) whose bumper is joined by the clustering anyway keeps its box whether
-  // or not the merge runs (fragments start at fragment_min_range_m)
+  // or not the merge runs
   const Points3 near_scan = cast_scene(oncoming_car(1.0, 12.0));
   const DetectorResult near_with = detect(near_scan), near_without = detect(near_scan, without_merge());
   const Detection* a = nearest_car(near_with, 1.0, 14.1);
