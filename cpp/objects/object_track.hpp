@@ -68,6 +68,9 @@ struct TrackFrame {
   // its sigmas (m/frame at the object's centre, rad/frame in the link's rotation), from
   // GICP's information; zero: e_reg uses the options' fixed sigmas
   Vec2 reg_sigma = Vec2::Zero();
+  // or its whole covariance (objects/motion_uncertainty.hpp: eps with M_w -> exp(eps) M_w,
+  // world twist [v; w] at the world origin, zero across the link); zero: the sigmas above
+  Mat6 reg_covariance = Mat6::Zero();
   // the camera pose T_c_w this row's box and registration were put in w with (the visual
   // tracker's; identity for the detections tracker): the keyframe BA takes them back into
   // the camera frame, where they were measured

@@ -29,6 +29,8 @@
 // columns for a unit q).
 #include <ceres/sized_cost_function.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 #include <stdexcept>
 
@@ -178,6 +180,29 @@ inline DetectionTwistCost* make_detection_twist_cost(const Mat6& Pi, const Vec6&
                                                      double information_scale = 1.0) {
   return new RelativeTwistCost(
       twist_weights(sigma_t, sigma_r, information_scale).asDiagonal() * Pi, xi_d, -1.0);
+}
+
+// A twist measurement with a full covariance (e_reg weighed by GICP's information):
+// r = L (xi_m - xi~(T_a, T_b)) with L^T L the pseudo-inverse of the covariance, so that a
+// direction the covariance leaves out (zero variance: across the link) carries no weight and
+// a Huber threshold is in sigmas; throws for a covariance that is not finite or has no
+// positive variance.
+inline Mat6 twist_sqrt_information(const Mat6& covariance) {
+  if (!covariance.allFinite()) throw std::invalid_argument("twist measurement: covariance not finite");
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(0.5 * (covariance + covariance.transpose()));
+  const double largest = eig.eigenvalues().maxCoeff();
+  if (!(largest > 0)) throw std::invalid_argument("twist measurement: covariance without a positive variance");
+  Mat6 L = Mat6::Zero();
+  for (int k = 0; k < 6; ++k) {
+    const double lambda = eig.eigenvalues()(k);
+    // below this fraction of the largest: a direction the measurement does not speak of
+    if (lambda > 1e-12 * largest) L.row(k) = eig.eigenvectors().col(k).transpose() / std::sqrt(lambda);
+  }
+  return L;
+}
+
+inline DetectionTwistCost* make_twist_measurement_cost(const Mat6& covariance, const Vec6& xi_m) {
+  return new RelativeTwistCost(twist_sqrt_information(covariance), xi_m, -1.0);
 }
 
 inline DetectionPoseCost* make_detection_pose_cost(const Mat4& T_det, double sigma_t,

@@ -129,6 +129,14 @@ ceres::ResidualBlockId ProblemBuilder::add_detection_twist(int pose_a, int pose_
       huber(huber_delta), blocks_[pose_a].data, blocks_[pose_b].data);
 }
 
+ceres::ResidualBlockId ProblemBuilder::add_twist_measurement(int pose_a, int pose_b,
+                                                             const Vec6& xi_m,
+                                                             const Mat6& covariance,
+                                                             double huber_delta) {
+  return problem_->AddResidualBlock(make_twist_measurement_cost(covariance, xi_m),
+                                    huber(huber_delta), blocks_[pose_a].data, blocks_[pose_b].data);
+}
+
 ceres::ResidualBlockId ProblemBuilder::add_detection_pose(int pose, const Mat4& T_det,
                                                           double sigma_t, double sigma_r,
                                                           double huber_delta,

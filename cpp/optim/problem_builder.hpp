@@ -107,6 +107,10 @@ class ProblemBuilder {
   ceres::ResidualBlockId add_detection_twist(int pose_a, int pose_b, const Mat6& Pi,
                                              const Vec6& xi_d, double sigma_t, double sigma_r,
                                              double huber_delta, double information_scale = 1.0);
+  // A measured twist xi_m from pose a to pose b with its full covariance (object_costs.hpp's
+  // twist measurement: e_reg weighed by GICP's information; zero variance = no weight there).
+  ceres::ResidualBlockId add_twist_measurement(int pose_a, int pose_b, const Vec6& xi_m,
+                                               const Mat6& covariance, double huber_delta);
   ceres::ResidualBlockId add_detection_pose(int pose, const Mat4& T_det, double sigma_t,
                                             double sigma_r, double huber_delta,
                                             double information_scale = 1.0);

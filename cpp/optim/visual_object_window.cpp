@@ -145,6 +145,14 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
     for (int i = 0; i + 1 < n; ++i) {
       if (!w.has_registration[i] || i + 1 < w.num_fixed_frames) continue;
       const Vec6 xi_r = geometry::se3_log(S * w.M_w_reg[i] * S_inv);  // eq. 7
+      if (static_cast<int>(w.reg_covariance.size()) == n && w.reg_covariance[i].trace() > 0) {
+        // eps moves M_w on the left: seen from S it is Ad_S eps, and log(exp(eps') exp(xi_r))
+        // = xi_r + J_l^-1(xi_r) eps' to first order
+        const Mat6 J = geometry::se3_left_jacobian_inverse(xi_r) * geometry::se3_adjoint(S);
+        b.add_twist_measurement(object_block[i], object_block[i + 1], xi_r,
+                                J * w.reg_covariance[i] * J.transpose(), o.huber_reg);
+        continue;
+      }
       const bool own_sigma = static_cast<int>(w.reg_sigma.size()) == n && w.reg_sigma[i].minCoeff() > 0;
       b.add_detection_twist(object_block[i], object_block[i + 1], Pi, xi_r,
                             own_sigma ? w.reg_sigma[i].x() : o.reg_sigma_translation,

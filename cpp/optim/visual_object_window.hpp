@@ -50,6 +50,9 @@ struct VisualObjectWindow {
   std::vector<char> has_registration;
   // its sigmas (m/frame, rad/frame) per entry, or none: the options' fixed sigmas
   std::vector<Vec2> reg_sigma;
+  // or its whole covariance per entry (eps with M_w -> exp(eps) M_w, world twist at the world
+  // origin; zero across the link), or none; a zero entry: the sigmas above
+  std::vector<Mat6> reg_covariance;
 };
 
 struct VisualObjectWindowOptions {

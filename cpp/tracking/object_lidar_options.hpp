@@ -133,6 +133,10 @@ struct ObjectLidarOptions {
   double reg_information_scale_rotation = 0.5;
   double reg_min_sigma_translation = 0.01;  // m/frame
   double reg_min_sigma_rotation = 0.001;    // rad/frame
+  // e_reg weighs each direction by GICP's covariance along it (scaled and floored as above),
+  // not every direction by the largest sigma: a face seen alone pins the step across it
+  // (planar-link objects only: a rigid scan)
+  bool reg_full_covariance = true;
   double huber_reg = 2.0;                  // sigmas
   // e_det, e_reg and the box prior in the keyframe BA too, relative to its cameras, whenever
   // local_ba.dynamic_objects puts the objects there (each as its use_* switch above allows)
@@ -227,6 +231,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("reg_information_scale_rotation", o.reg_information_scale_rotation, 1e-6, 1e6);
   visit("reg_min_sigma_translation", o.reg_min_sigma_translation, 1e-6, 100.0);
   visit("reg_min_sigma_rotation", o.reg_min_sigma_rotation, 1e-6, 10.0);
+  visit("reg_full_covariance", o.reg_full_covariance, 0, 1);
   visit("huber_reg", o.huber_reg, 0.0, 1000.0);
   visit("keyframe_ba_terms", o.keyframe_ba_terms, 0, 1);
   visit("smoothing_keypoint_sigma_scale", o.smoothing_keypoint_sigma_scale, 0.01, 1000.0);

@@ -93,6 +93,19 @@ void ObjectTracker::register_scan(int c, const Frame& frame) {
       row.registered = true;
       row.M_w_registered = geometry::se3_inverse(r.T_target_source);  // eq. 7: xi_r = log(M_w)
       row.reg_sigma = Vec2::Zero();
+      row.reg_covariance = Mat6::Zero();
+      // e_reg's whole covariance for a car (a rigid scan); a walker's limbs move between
+      // scans, so its registrations keep the largest sigmas below
+      if (lidar_options_.reg_sigma_from_information && lidar_options_.reg_full_covariance &&
+          track.link == geometry::LinkType::kPlanar) {
+        objects::MotionCovarianceOptions co;
+        co.scale_translation = lidar_options_.reg_information_scale_translation;
+        co.scale_rotation = lidar_options_.reg_information_scale_rotation;
+        co.min_sigma_translation = lidar_options_.reg_min_sigma_translation;
+        co.min_sigma_rotation = lidar_options_.reg_min_sigma_rotation;
+        row.reg_covariance = objects::registered_motion_covariance(
+            r.information, row.M_w_registered, track.Pi, row.T_w_o.topRightCorner<3, 1>(), co);
+      }
       if (lidar_options_.reg_sigma_from_information) {
         // W_reg from GICP's own uncertainty, scaled to the errors it measured (config)
         const objects::MotionSigmas sd = objects::registered_motion_sigmas(

@@ -173,6 +173,7 @@ bool ObjectTracker::build_window(int c, int first, int rows, const std::map<int,
     w->M_w_reg.push_back(next ? track.frames[r + 1].M_w_registered : Mat4::Identity());
     w->has_registration.push_back(next);
     w->reg_sigma.push_back(next ? track.frames[r + 1].reg_sigma : Vec2::Zero());
+    w->reg_covariance.push_back(next ? track.frames[r + 1].reg_covariance : Mat6::Zero());
   }
   return true;
 }

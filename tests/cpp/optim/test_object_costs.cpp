@@ -253,3 +253,47 @@ TEST(ObjectProblemBuilder, AddsTheObjectFamiliesAndRejectsBadSigmas) {
                std::invalid_argument);
   EXPECT_EQ(b.num_residuals(), 4);
 }
+
+TEST(ObjectCosts, ATwistMeasurementIsWhitenedByItsFullCovarianceAndBlindWhereItHasNone) {
+  // covariance: 1 cm along x, 10 cm along z, 0.01 rad of yaw (about y), correlated x-yaw; zero
+  // along y and in roll / pitch (the planar link)
+  Mat6 C = Mat6::Zero();
+  C(0, 0) = 1e-4;
+  C(2, 2) = 1e-2;
+  C(4, 4) = 1e-4;
+  C(0, 4) = C(4, 0) = 0.5e-4;
+  const Mat6 L = twist_sqrt_information(C);
+  // L^T L is the pseudo-inverse: C L^T L C = C, and the null directions get no weight
+  EXPECT_LT((C * L.transpose() * L * C - C).norm(), 1e-12);
+  EXPECT_LT((L * Vec6::Unit(1)).norm(), 1e-9);
+  EXPECT_LT((L * Vec6::Unit(3)).norm(), 1e-9);
+  // an error of 1 cm along x alone is worth sqrt(e^T C^+ e) sigmas
+  const Pose p0 = params(Mat4::Identity()), p1 = params(Mat4::Identity());
+  const double* two[] = {p0.data(), p1.data()};
+  Vec6 e = Vec6::Zero();
+  e(0) = 0.01;
+  std::unique_ptr<ceres::CostFunction> cost(make_twist_measurement_cost(C, e));
+  Vec6 r;
+  ASSERT_TRUE(cost->Evaluate(two, r.data(), nullptr));
+  const Eigen::Matrix2d C_xyaw = (Eigen::Matrix2d() << 1e-4, 0.5e-4, 0.5e-4, 1e-4).finished();
+  EXPECT_NEAR(r.norm(), std::sqrt(Vec2(0.01, 0).dot(C_xyaw.inverse() * Vec2(0.01, 0))), 1e-9);
+  // a jump along the null direction (y) costs nothing
+  Mat4 up = Mat4::Identity();
+  up(1, 3) = 0.5;
+  const Pose pu = params(up);
+  const double* jump[] = {p0.data(), pu.data()};
+  cost.reset(make_twist_measurement_cost(C, Vec6::Zero()));
+  ASSERT_TRUE(cost->Evaluate(jump, r.data(), nullptr));
+  EXPECT_LT(r.norm(), 1e-9);
+  // a covariance that is not finite, or has no variance, is refused
+  EXPECT_THROW(twist_sqrt_information(Mat6::Zero()), std::invalid_argument);
+  Mat6 bad = C;
+  bad(2, 2) = NAN;
+  EXPECT_THROW(twist_sqrt_information(bad), std::invalid_argument);
+  ProblemBuilder b;
+  const int a = b.add_pose(Mat4::Identity(), true);
+  const int c = b.add_pose(Mat4::Identity(), false);
+  EXPECT_NE(b.add_twist_measurement(a, c, Vec6::Zero(), C, 2.0), nullptr);
+  EXPECT_THROW(b.add_twist_measurement(a, c, Vec6::Zero(), bad, 2.0), std::invalid_argument);
+  EXPECT_EQ(b.num_residuals(), 1);
+}

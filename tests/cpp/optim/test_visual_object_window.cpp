@@ -18,6 +18,7 @@
 #include "common/kitti_camera.hpp"
 #include "geometry/link_projection.hpp"
 #include "geometry/se3.hpp"
+#include "geometry/so3.hpp"
 #include "optim/heading_cost.hpp"
 #include "optim/pose_parameterization.hpp"
 #include "optim/visual_object_window.hpp"
@@ -296,6 +297,73 @@ TEST(VisualObjectWindow, AFarCarsScatteredBoxesPullItsStepsLessWithRangeScaledSi
   }
   // (measured over seeds 1-4: 0.39 m of step error fixed, 0.17 m scaled)
   EXPECT_LT(sum_scaled, 0.7 * sum_fixed) << "fixed " << sum_fixed << " m, scaled " << sum_scaled << " m";
+}
+
+namespace {
+
+// Registered motions of a car seen by one face (the regime of a lead car's rear): exact along
+// its length, off sideways (object z) by lateral_noise_m per step (seeded), and the covariance
+// GICP would give them at the car's centre: sigma_along_m along the length, lateral_noise_m
+// sideways, 0.1 deg in yaw, zero across the planar link (world twist at the origin, as
+// objects::registered_motion_covariance gives it).
+void add_one_face_registrations(RegisteredTrack& s, double sigma_along_m, double lateral_noise_m,
+                                unsigned seed) {
+  std::mt19937 rng(seed + 200);
+  std::normal_distribution<double> unit(0, 1);
+  const int n = static_cast<int>(s.T_w_o_true.size());
+  s.window.reg_covariance.assign(n, Mat6::Zero());
+  s.window.reg_sigma.assign(n, Vec2::Zero());
+  for (int f = 0; f + 1 < n; ++f) {
+    Mat4 error = Mat4::Identity();
+    error(2, 3) = lateral_noise_m * unit(rng);
+    s.window.M_w_reg[f] = s.T_w_o_true[f + 1] * error * geometry::se3_inverse(s.T_w_o_true[f]);
+    const Mat3 R = s.T_w_o_true[f + 1].topLeftCorner<3, 3>();
+    const Vec3 c = s.T_w_o_true[f + 1].topRightCorner<3, 1>();
+    Mat6 C_centre = Mat6::Zero();  // [v at the centre; w], world axes
+    C_centre.topLeftCorner<3, 3>() =
+        R * Vec3(sigma_along_m * sigma_along_m, 0, lateral_noise_m * lateral_noise_m).asDiagonal() *
+        R.transpose();
+    C_centre.bottomRightCorner<3, 3>() = std::pow(0.1 * kDeg, 2) * kUp * kUp.transpose();
+    Mat6 from_centre = Mat6::Identity();  // [v_c; w] -> [v_c + c x w; w] at the origin
+    from_centre.topRightCorner<3, 3>() = geometry::hat(c);
+    s.window.reg_covariance[f] = from_centre * C_centre * from_centre.transpose();
+    // the largest sigma of each kind, what e_reg used before the full covariance
+    s.window.reg_sigma[f] = Vec2(std::max(sigma_along_m, lateral_noise_m), 0.1 * kDeg);
+  }
+}
+
+}  // namespace
+
+// Sum of the estimated steps' errors along the car's length (object x, m).
+double step_error_along_m(const RegisteredTrack& s) {
+  double sum = 0;
+  for (size_t f = 0; f + 1 < s.T_w_o_true.size(); ++f) {
+    const Mat4 truth = geometry::se3_inverse(s.T_w_o_true[f]) * s.T_w_o_true[f + 1];
+    const Mat4 estimate = geometry::se3_inverse(s.window.T_w_o[f]) * s.window.T_w_o[f + 1];
+    sum += std::abs((geometry::se3_inverse(truth) * estimate)(0, 3));
+  }
+  return sum;
+}
+
+TEST(VisualObjectWindow, AFullRegistrationCovarianceKeepsScatteredBoxesOffTheWellSeenSteps) {
+  const Mat6 Pi = geometry::projector_planar(kUp);
+  const VisualObjectWindowOptions o;
+  double sum_largest = 0, sum_full = 0;
+  for (unsigned seed : {1u, 2u, 3u, 4u}) {
+    // 15 m ahead, boxes 0.18 m off per coordinate; GICP: 5 mm along the car, 6 cm sideways
+    RegisteredTrack full = registered_track(10, 0.8, 0.0, 0.0, seed, 15.0);
+    add_detections(full, 0.012, seed);
+    add_one_face_registrations(full, 0.005, 0.06, seed);
+    RegisteredTrack largest = full;
+    largest.window.reg_covariance.clear();  // every direction weighed by the largest sigma
+    ASSERT_TRUE(refine_visual_object_window(test_scenes::kitti_camera(), full.window, Pi, o).usable);
+    ASSERT_TRUE(refine_visual_object_window(test_scenes::kitti_camera(), largest.window, Pi, o).usable);
+    sum_full += step_error_along_m(full);
+    sum_largest += step_error_along_m(largest);
+  }
+  std::cout << "step error along the car: largest sigma " << sum_largest << " m, full covariance "
+            << sum_full << " m\n";
+  EXPECT_LT(sum_full, 0.5 * sum_largest);
 }
 
 // The final smoothing's window (tracking/object_windows.cpp): a whole track, one pose held as

@@ -886,6 +886,11 @@ TEST_F(DetectionFusion, ObjectScansOfConsecutiveFramesAreRegisteredToTheCarsMoti
     // measured: 0.03-0.24 cm and 0.02-0.25 deg (600 points drawn anew on the car each frame)
     EXPECT_LT(err_m, 0.01) << row.frame;
     EXPECT_LT(err_deg, 0.4) << row.frame;
+    // a car (planar link): e_reg's whole covariance, nothing across the link
+    ASSERT_EQ(track.link, geometry::LinkType::kPlanar);
+    EXPECT_GT(row.reg_covariance.trace(), 0) << row.frame;
+    const Mat6 across = Mat6::Identity() - track.Pi;
+    EXPECT_LT((across * row.reg_covariance * across.transpose()).norm(), 1e-12 * row.reg_covariance.norm());
   }
   EXPECT_EQ(registered, 7);
   // without the scan: nothing registered
