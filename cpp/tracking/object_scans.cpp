@@ -105,6 +105,8 @@ void ObjectTracker::register_scan(int c, const Frame& frame) {
         co.min_sigma_rotation = lidar_options_.reg_min_sigma_rotation;
         row.reg_covariance = objects::registered_motion_covariance(
             r.information, row.M_w_registered, track.Pi, row.T_w_o.topRightCorner<3, 1>(), co);
+        // never a NaN into the window (it refuses one): the sigmas below then
+        if (!row.reg_covariance.allFinite()) row.reg_covariance = Mat6::Zero();
       }
       if (lidar_options_.reg_sigma_from_information) {
         // W_reg from GICP's own uncertainty, scaled to the errors it measured (config)
