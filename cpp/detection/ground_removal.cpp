@@ -27,6 +27,12 @@ float kth_lowest(std::vector<float>& values, int k) {
   std::nth_element(values.begin(), values.begin() + static_cast<long>(n), values.end());
   return values[n];
 }
+// m, how far above the road (plus ground_climb_m) the shadow line must pass for the road
+// there to count as hidden: above the road's own horizon on a steady climb (within
+// centimetres) and the camera centre's 0.08 m below KITTI's LiDAR; a parked car's shadow
+// passes 0.3-1.4 m above the road for 80 m behind it.
+constexpr double kShadowMarginM = 0.3;
+
 }  // namespace
 
 float GroundGrid::road_at(double x, double z) const {
@@ -53,9 +59,15 @@ GroundGrid estimate_ground(const std::vector<ScenePoint>& points, const Detector
   }
   for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
   std::vector<float> heights(static_cast<std::size_t>(start[cells]));
+  // and each return's elevation (up / horizontal range), for the shadows of nearer returns
+  std::vector<float> elevations(heights.size());
   std::vector<int> fill(start.begin(), start.end() - 1);
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (cell[i] >= 0) heights[static_cast<std::size_t>(fill[cell[i]]++)] = points[i].up;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (cell[i] < 0) continue;
+    const auto slot = static_cast<std::size_t>(fill[cell[i]]++);
+    heights[slot] = points[i].up;
+    elevations[slot] = points[i].up / std::max(std::hypot(points[i].x, points[i].z), 1e-3f);
+  }
 
   // starting road height: median of the bins' k-th lowest returns near the sensor
   std::vector<float> near, bin_values;
@@ -78,10 +90,16 @@ GroundGrid estimate_ground(const std::vector<ScenePoint>& points, const Detector
   for (int s = 0; s < g.segments; ++s) {
     float road = start_up;
     double road_r = 0.0;  // m, range of the last bin that measured the road
+    // highest elevation (up / range) of the returns of the bins walked so far: below the ray
+    // at that elevation, nothing farther is seen (the camera centre stands in for the LiDAR,
+    // ~0.08 m higher on KITTI)
+    double horizon = -std::numeric_limits<double>::infinity();
     for (int b = 0; b < g.bins; ++b) {
       const int c = s * g.bins + b;
       const double r = (b + 0.5) * g.bin_m;
-      const double rise = o.max_ground_slope * (r - road_r);
+      const bool shadowed =
+          o.hold_road_in_shadows && horizon * r > road + o.ground_climb_m + kShadowMarginM;
+      const double rise = o.max_ground_slope * (shadowed ? g.bin_m : r - road_r);
       const float lowest_ok = static_cast<float>(road - rise - o.ground_drop_m);
       bin_values.clear();
       for (int i = start[c]; i < start[c + 1]; ++i)
@@ -96,6 +114,8 @@ GroundGrid estimate_ground(const std::vector<ScenePoint>& points, const Detector
         }
       }
       g.road_up[static_cast<std::size_t>(c)] = road;
+      for (int i = start[c]; i < start[c + 1]; ++i)
+        horizon = std::max(horizon, static_cast<double>(elevations[static_cast<std::size_t>(i)]));
     }
   }
   return g;

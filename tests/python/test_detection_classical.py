@@ -165,8 +165,9 @@ def test_real_kitti_cars_seen_whole_face_their_labelled_front(kitti_tracking_lid
 
 def test_real_0001_orientation_score_follows_the_told_fronts(kitti_tracking_lidar):
     """KITTI's AOS (orientation similarity) of the classical boxes on real 0001: a box turned
-    around scores 0. Measured 53.8 % AOS@0.7 for 60.7 % 2D AP@0.7 (moderate cars) with the
-    told fronts, 35.4 % without (docs/detection.md)."""
+    around scores 0. Measured 56.5 % AOS@0.7 for 71.1 % 2D AP@0.7 (moderate cars) with the
+    told fronts, 36.4 % without (docs/detection.md; before the road was held behind occluders
+    53.8 / 60.7 / 35.4 %: the far cars it added are partial views whose front is not told)."""
     from twistslam.eval.detection_ap import evaluate_detections
 
     seq = KittiTracking(kitti_tracking_lidar, "0001")
@@ -182,8 +183,8 @@ def test_real_0001_orientation_score_follows_the_told_fronts(kitti_tracking_lida
         scores[told] = (r.aos("Car", "moderate", 0.7), r.ap("Car", "moderate", "2d", 0.7))
     (aos, ap), (aos_off, ap_off) = scores[True], scores[False]
     assert ap == pytest.approx(ap_off)  # the front changes no overlap
-    assert aos >= 0.8 * ap, scores
-    assert aos - aos_off >= 10.0, scores
+    assert aos >= 0.75 * ap, scores
+    assert aos - aos_off >= 15.0, scores
 
 
 def test_front_from_profile_off_keeps_every_yaw_mod_pi(sim_sequence):
@@ -288,11 +289,18 @@ def test_real_scans_near_car_boxes_lie_on_labelled_cars(kitti_tracking_lidar):
     # the 27 scans without car_max_edge_distance_m, 1 with it
     seq = KittiTracking(kitti_tracking_lidar, "0001")
     labels = seq.gt_objects
-    # (measured: 6 without either rule, 1 with the defaults, 1 with the roughness rule alone)
+    # Holding the road behind occluders removes 4 of the 6 on its own (2026-12-05: most of
+    # them stood behind parked cars, on a road raised to their lowest visible returns), so
+    # the two rules are checked with it off, on all six. Measured: 6 with neither rule nor the
+    # held road, 0 with the defaults, 1 with the roughness rule alone, 2 with the held road
+    # alone (before it: 1 with the defaults).
+    climbing = {"hold_road_in_shadows": False}
     detectors = {"default": ClassicalDetector(),
                  "lenient": ClassicalDetector(car_max_edge_distance_m=10.0,
-                                              car_max_surface_variation=0.0),
-                 "roughness only": ClassicalDetector(car_max_edge_distance_m=10.0)}
+                                              car_max_surface_variation=0.0, **climbing),
+                 "roughness only": ClassicalDetector(car_max_edge_distance_m=10.0, **climbing),
+                 "held road only": ClassicalDetector(car_max_edge_distance_m=10.0,
+                                                     car_max_surface_variation=0.0)}
     off_labels = dict.fromkeys(detectors, 0)
     for i in range(len(seq)):
         frame = seq.frame(i)
@@ -309,3 +317,4 @@ def test_real_scans_near_car_boxes_lie_on_labelled_cars(kitti_tracking_lidar):
     assert off_labels["default"] <= 2, off_labels
     # the surface roughness (car_max_surface_variation) tells the same foliage on its own
     assert off_labels["roughness only"] <= 2, off_labels
+    assert off_labels["held road only"] <= 3, off_labels
