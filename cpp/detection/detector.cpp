@@ -9,6 +9,7 @@
 #include "detection/front_profile.hpp"
 #include "detection/ground_removal.hpp"
 #include "detection/occlusion.hpp"
+#include "detection/person_outline.hpp"
 #include "detection/scene_points.hpp"
 #include "detection/surface_roughness.hpp"
 
@@ -69,6 +70,20 @@ std::vector<ProfilePoint> profile_of(const Detection& car, const ClusterShape& s
     profile.push_back({static_cast<float>((pts[i].x - car.centre.x()) * c - (pts[i].z - car.centre.z()) * s),
                        static_cast<float>(pts[i].up - shape.road_up)});
   return profile;
+}
+
+// A person-sized cluster whose top is as wide as its shoulders (person_outline.hpp), judged
+// only when the shoulders span person_outline_min_steps azimuth steps.
+bool is_post(const std::vector<int>& members, const std::vector<ScenePoint>& pts,
+             const ClusterShape& shape, const DetectorOptions& o) {
+  const PersonOutline outline =
+      person_outline(members, pts, static_cast<float>(shape.road_up + shape.top_m));
+  if (outline.shoulder_width_m <= 0) return false;
+  double range = 0;
+  for (const int i : members) range = std::max(range, static_cast<double>(std::hypot(pts[i].x, pts[i].z)));
+  const double step_m = o.sensor_azimuth_step_deg * M_PI / 180.0 * range;
+  if (outline.shoulder_width_m < o.person_outline_min_steps * step_m) return false;
+  return outline.head_width_m >= o.person_max_head_ratio * outline.shoulder_width_m;
 }
 
 ClusterShape shape_of(const std::vector<int>& members, const std::vector<ScenePoint>& pts,
@@ -162,6 +177,9 @@ DetectorResult detect(const Eigen::Ref<const Points3>& points_c, const DetectorO
           d->surface_variation = rough.median_variation;
         }
       }
+      if (d->cls != ObjectClass::kCar && options.person_max_head_ratio > 0 &&
+          is_post(members, scene.points, shape, options))
+        continue;
       if (options.front_from_profile && d->cls == ObjectClass::kCar && d->length_seen)
         tell_front(*d, shape, profile_of(*d, shape, members, scene.points), options);
       candidates.push_back(*d);

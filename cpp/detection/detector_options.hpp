@@ -221,6 +221,17 @@ struct DetectorOptions {
   // fewer thinned returns are too few to judge, and the car stays: with 20, a simulated car
   // at 58 m (21 returns) measured 0.083; from 30 none of the 16 sequences' cars passes 0.05
   int surface_min_points = 30;
+
+  // --- posts read as people (person_outline.hpp) ---
+  // A person whose head band is at least this wide relative to its shoulder band is a post
+  // (a pole, a tree trunk) and no person (0: off). Real KITTI: labelled pedestrians
+  // 0.29-0.72, the tree trunk 0001 passes 0.96-1.00; simulated people median 0.40, trunks and
+  // poles 1.00 with p5 0.83-0.86 (docs/detection.md, "Posts read as people").
+  double person_max_head_ratio = 0.9;
+  // azimuth steps (sensor_azimuth_step_deg) the shoulder band must span for the ratio to be
+  // judged: a far person is 1-2 returns wide at head and shoulders alike (simulated people
+  // at 22-40 m measured 1.0)
+  int person_outline_min_steps = 3;
 };
 
 // Range of every option (inclusive, in the option's unit); the Python bindings and validate()
@@ -280,6 +291,8 @@ void for_each_option(DetectorOptions& o, Visit&& visit) {
   visit("surface_voxel_m", o.surface_voxel_m, 0.01, 10.0);
   visit("surface_neighbors", o.surface_neighbors, 3, 100);
   visit("surface_min_points", o.surface_min_points, 4, 1000000);
+  visit("person_max_head_ratio", o.person_max_head_ratio, 0.0, 10.0);
+  visit("person_outline_min_steps", o.person_outline_min_steps, 1, 1000);
   visit("score_points_scale", o.score_points_scale, 1.0, 1e6);
   visit("score_edge_distance_m", o.score_edge_distance_m, 0.001, 10.0);
 }

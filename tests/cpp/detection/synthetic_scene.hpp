@@ -49,6 +49,16 @@ inline double hit_box(const Vec3& d, const SceneBox& b, const SceneRoad& road) {
   return t_in <= t_out && t_in > 0 ? t_in : std::numeric_limits<double>::infinity();
 }
 
+// A head (0.2 m wide, 0.25 m tall) standing on `body`'s top: people are narrower at the top
+// than at the shoulders, which tells them from posts (person_outline.hpp).
+inline SceneBox head_on(const SceneBox& body) {
+  SceneBox head = body;
+  head.length = head.width = 0.2;
+  head.height = 0.25;
+  head.lift = body.lift + body.height;
+  return head;
+}
+
 // Scan of the scene: 64 beams from -24.8 to +2 deg elevation (the HDL-64's span), one
 // return every azimuth_step_deg over +-azimuth_span_deg around the z axis, up to 80 m.
 inline Points3 cast_scene(const std::vector<SceneBox>& boxes, const SceneRoad& road = {},

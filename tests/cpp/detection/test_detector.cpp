@@ -86,7 +86,7 @@ TEST(Detector, PersonIsAPedestrianAndAFloatingBoxNothing) {
   person.z = 10.0;
   person.length = 0.6;
   person.width = 0.5;
-  person.height = 1.75;
+  person.height = 1.5;  // and a head up to 1.75 m
   SceneBox sign;  // a board hanging 2.2 m above the road: no road user floats
   sign.x = -4.0;
   sign.z = 12.0;
@@ -94,11 +94,11 @@ TEST(Detector, PersonIsAPedestrianAndAFloatingBoxNothing) {
   sign.lift = 2.2 - 0.8;
   sign.length = 2.0;
   sign.width = 0.3;
-  const DetectorResult r = detect(cast_scene({person, sign}));
+  const DetectorResult r = detect(cast_scene({person, head_on(person), sign}));
   ASSERT_EQ(r.detections.size(), 1u);
   EXPECT_EQ(r.detections[0].cls, ObjectClass::kPedestrian);
   EXPECT_NEAR(r.detections[0].centre.x(), person.x, 0.4);
-  EXPECT_NEAR(r.detections[0].height, person.height, kHeightTolerance);
+  EXPECT_NEAR(r.detections[0].height, person.height + head_on(person).height, kHeightTolerance);
 }
 
 TEST(Detector, BuildingWallIsNoCar) {
@@ -185,14 +185,14 @@ TEST(Detector, CyclistFromTheSideAndATallCarFromBehind) {
   bike.height = 1.0;
   rider.length = 0.5;
   rider.width = 0.4;
-  rider.height = 0.75;
-  rider.lift = 1.0;
+  rider.height = 0.55;
+  rider.lift = 1.0;  // and a head up to 1.8 m
   // a car as tall as a cyclist (1.8 m) straight ahead, seen from behind
   van_like.z = 16.0;
   van_like.yaw = 0.5 * M_PI;
   van_like.width = 1.8;
   van_like.height = 1.8;
-  const DetectorResult r = detect(cast_scene({bike, rider, van_like}));
+  const DetectorResult r = detect(cast_scene({bike, rider, head_on(rider), van_like}));
   ASSERT_EQ(r.detections.size(), 2u);
   const Detection& car = r.detections[0].cls == ObjectClass::kCar ? r.detections[0] : r.detections[1];
   const Detection& cyclist = &car == &r.detections[0] ? r.detections[1] : r.detections[0];
