@@ -10,6 +10,7 @@
 #include "detection/ground_removal.hpp"
 #include "detection/occlusion.hpp"
 #include "detection/person_outline.hpp"
+#include "detection/top_beam.hpp"
 #include "detection/scene_points.hpp"
 #include "detection/surface_roughness.hpp"
 
@@ -165,6 +166,9 @@ DetectorResult detect(const Eigen::Ref<const Points3>& points_c, const DetectorO
   out.timings.cluster_ms = ms_since(t);
 
   t = Clock::now();
+  // only when a person could be dropped: the fit is one pass over the selection
+  const TopBeam top_beam =
+      options.person_top_beam_margin_m > 0 ? fit_top_beam(scene.points) : TopBeam{};
   std::vector<Detection> candidates;
   for (const std::vector<int>& members : clusters) {
     const ClusterShape shape = shape_of(members, scene.points, above, occlusion, options);
@@ -179,6 +183,9 @@ DetectorResult detect(const Eigen::Ref<const Points3>& points_c, const DetectorO
       }
       if (d->cls != ObjectClass::kCar && options.person_max_head_ratio > 0 &&
           is_post(members, scene.points, shape, options))
+        continue;
+      if (d->cls != ObjectClass::kCar && options.person_top_beam_margin_m > 0 &&
+          cut_by_top_beam(members, scene.points, top_beam, options.person_top_beam_margin_m))
         continue;
       if (options.front_from_profile && d->cls == ObjectClass::kCar && d->length_seen)
         tell_front(*d, shape, profile_of(*d, shape, members, scene.points), options);

@@ -232,6 +232,12 @@ struct DetectorOptions {
   // judged: a far person is 1-2 returns wide at head and shoulders alike (simulated people
   // at 22-40 m measured 1.0)
   int person_outline_min_steps = 3;
+  // m: a person or cyclist whose highest return lies within this of the LiDAR's top beam
+  // (top_beam.hpp) is a post cut by the field of view and no person (0: off). The posts'
+  // tops lie on the fitted beam within 0.01 m (simulated poles and trunks; real 0001's
+  // trunk), people's heads 0.17 m or more below it (simulated), 0.26 m or more (real KITTI's
+  // labelled pedestrians and cyclists): 0.08 leaves room for a fit 0.02-0.05 m off.
+  double person_top_beam_margin_m = 0.08;
 };
 
 // Range of every option (inclusive, in the option's unit); the Python bindings and validate()
@@ -293,6 +299,7 @@ void for_each_option(DetectorOptions& o, Visit&& visit) {
   visit("surface_min_points", o.surface_min_points, 4, 1000000);
   visit("person_max_head_ratio", o.person_max_head_ratio, 0.0, 10.0);
   visit("person_outline_min_steps", o.person_outline_min_steps, 1, 1000);
+  visit("person_top_beam_margin_m", o.person_top_beam_margin_m, 0.0, 1.0);
   visit("score_points_scale", o.score_points_scale, 1.0, 1e6);
   visit("score_edge_distance_m", o.score_edge_distance_m, 0.001, 10.0);
 }
