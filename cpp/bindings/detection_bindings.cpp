@@ -87,7 +87,11 @@ py::dict run_detect(const py::handle& points_c, const py::object& options, const
                   "surface_variation"_a = surface_variation,
                   "num_non_finite"_a = r.num_non_finite,
                   "num_selected"_a = r.num_selected, "num_obstacle"_a = r.num_obstacle,
-                  "num_clusters"_a = r.num_clusters, "timings"_a = timings);
+                  "num_clusters"_a = r.num_clusters, "timings"_a = timings,
+                  "top_beam"_a = py::dict("valid"_a = r.top_beam.valid, "a"_a = r.top_beam.a,
+                                          "b"_a = r.top_beam.b, "c"_a = r.top_beam.c,
+                                          "d"_a = r.top_beam.d, "num_bins"_a = r.top_beam.num_bins,
+                                          "rms_m"_a = r.top_beam.rms_m));
 }
 
 }  // namespace
@@ -124,7 +128,11 @@ dict
     classes and cars too sparse to judge; cars above ``car_max_surface_variation`` are not
     reported: foliage); sorted by
     decreasing score. Also ``num_non_finite``, ``num_selected``, ``num_obstacle``,
-    ``num_clusters`` and ``timings`` (ms per stage: select, ground, cluster, fit).
+    ``num_clusters``, ``timings`` (ms per stage: select, ground, cluster, fit) and
+    ``top_beam``: the LiDAR's highest beam fitted to the scan, ``up = a + b r + c x + d z`` (m,
+    up = -y, r = hypot(x, z)), with ``valid``, ``num_bins`` (envelope bins on it) and
+    ``rms_m`` (their residual); ``valid`` False when the scan shows no beam or
+    ``person_top_beam_margin_m`` is 0 (docs/detection.md, "Posts cut by the top beam").
 
 Raises
 ------

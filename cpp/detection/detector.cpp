@@ -167,8 +167,8 @@ DetectorResult detect(const Eigen::Ref<const Points3>& points_c, const DetectorO
 
   t = Clock::now();
   // only when a person could be dropped: the fit is one pass over the selection
-  const TopBeam top_beam =
-      options.person_top_beam_margin_m > 0 ? fit_top_beam(scene.points) : TopBeam{};
+  if (options.person_top_beam_margin_m > 0) out.top_beam = fit_top_beam(scene.points);
+  const TopBeam& top_beam = out.top_beam;
   std::vector<Detection> candidates;
   for (const std::vector<int>& members : clusters) {
     const ClusterShape shape = shape_of(members, scene.points, above, occlusion, options);

@@ -7,6 +7,7 @@
 
 #include "detection/classify.hpp"
 #include "detection/detector_options.hpp"
+#include "detection/top_beam.hpp"
 #include "geometry/types.hpp"
 
 namespace twistslam::detection {
@@ -21,6 +22,7 @@ struct DetectorResult {
   int num_selected = 0;               // returns in the region of interest
   int num_obstacle = 0;               // of those, above the road and below the height cap
   int num_clusters = 0;               // clusters with at least min_cluster_points returns
+  TopBeam top_beam;                   // the LiDAR's top beam as fitted (person_top_beam_margin_m > 0)
   DetectorTimings timings;
 };
 

@@ -19,6 +19,14 @@ inline const detection::Detection* nearest_car(const detection::DetectorResult& 
   return best;
 }
 
+// Person and cyclist detections within 0.8 m (BEV) of (x, z).
+inline int people_near(const detection::DetectorResult& r, double x, double z) {
+  int n = 0;
+  for (const detection::Detection& d : r.detections)
+    n += d.cls != detection::ObjectClass::kCar && std::hypot(d.centre.x() - x, d.centre.z() - z) < 0.8;
+  return n;
+}
+
 // The detections as text, for failure messages.
 inline std::string describe(const detection::DetectorResult& r) {
   std::string out;

@@ -59,6 +59,16 @@ inline SceneBox head_on(const SceneBox& body) {
   return head;
 }
 
+// A post (a pole, a tree trunk) of square cross-section `thickness` (m), `height` m tall.
+inline SceneBox post(double x, double z, double thickness, double height) {
+  SceneBox b;
+  b.x = x;
+  b.z = z;
+  b.length = b.width = thickness;
+  b.height = height;
+  return b;
+}
+
 // Scan of the scene: 64 beams from -24.8 to +2 deg elevation (the HDL-64's span), one
 // return every azimuth_step_deg over +-azimuth_span_deg around the z axis, up to 80 m.
 inline Points3 cast_scene(const std::vector<SceneBox>& boxes, const SceneRoad& road = {},

@@ -16,26 +16,6 @@ using namespace twistslam;
 using namespace twistslam::detection;
 using namespace twistslam::test_scenes;
 
-namespace {
-
-SceneBox post(double x, double z, double thickness, double height) {
-  SceneBox b;
-  b.x = x;
-  b.z = z;
-  b.length = b.width = thickness;
-  b.height = height;
-  return b;
-}
-
-int people_near(const DetectorResult& r, double x, double z) {
-  int n = 0;
-  for (const Detection& d : r.detections)
-    n += d.cls != ObjectClass::kCar && std::hypot(d.centre.x() - x, d.centre.z() - z) < 0.8;
-  return n;
-}
-
-}  // namespace
-
 TEST(PersonOutline, APersonsHeadIsNarrowerThanTheShouldersAPostsTopIsNot) {
   SceneBox body;
   body.x = 1.5;
