@@ -16,12 +16,12 @@ namespace {
 // m, ranges the envelope is taken over: nearer, the beam is above most objects' tops and few
 // returns reach it; farther, it passes over buildings more often than it hits them.
 constexpr double kMinRangeM = 6.0, kMaxRangeM = 40.0;
-// Envelope bins: 2 m of range x 10 deg of azimuth (17 x 9-18 bins in KITTI's camera field;
-// 80-130 of them were on the beam in real 0001 and the object frames).
+// Envelope bins: 2 m of range x 10 deg of azimuth (17 x 9-12 bins in the camera's field; 25-51
+// of them were on the beam in real 0001 and the object frames).
 constexpr double kRangeBinM = 2.0, kAzimuthBinDeg = 10.0;
 // m above the camera centre: lower returns are not binned (no hypot / atan2 for the road and
 // most of the cars). A valid beam is 0.3 m or more above the camera 20 m ahead (below), and
-// the measured ones 0.29-0.49 m up at 6 m: a return under -0.3 m cannot be on one.
+// the fitted ones 0.23-0.45 m up 6 m ahead: a return under -0.3 m cannot be on one.
 constexpr double kMinUpM = -0.3;
 // m, a bin on the beam: its highest return within this of the cone. The fitted beam's
 // residual is 0.3-0.8 mm on real and simulated scans (7.6 mm on one real object frame); with
@@ -38,9 +38,9 @@ constexpr double kMaxAboveShare = 0.05;
 constexpr int kTrials = 400;
 constexpr double kDrawBelowM = 0.3;
 // A valid beam: enough bins on it, spread over the ranges, on a cone of positive elevation
-// (b = tan(elevation); the HDL-64's top beam +2 deg: 0.034-0.046 in the camera frames of KITTI
+// (b = tan(elevation); the HDL-64's top beam +2 deg: 0.033-0.037 in the camera frames of KITTI
 // and the simulator) whose tilt against the camera is small (c, d: 0.010-0.012 there), and
-// which runs above the sensor: 20 m ahead 0.77-1.0 m above the camera centre there, where a
+// which runs above the sensor: 20 m ahead 0.57-0.83 m above the camera centre there, where a
 // cone through a flat road or car roofs would lie 0.2-1.7 m below it.
 constexpr int kMinBins = 8, kMinRangeBins = 6;
 constexpr double kMinSlope = 0.01, kMaxSlope = 0.2, kMaxTilt = 0.03;
