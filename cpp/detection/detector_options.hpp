@@ -234,7 +234,7 @@ struct DetectorOptions {
   int person_outline_min_steps = 3;
   // m: a person or cyclist whose highest return lies within this of the LiDAR's top beam
   // (top_beam.hpp) is a post cut by the field of view and no person (0: off). The posts'
-  // tops lie on the fitted beam within 0.01 m (simulated poles and trunks; real 0001's
+  // tops lie on the fitted beam within 0.015 m (simulated poles and trunks; real 0001's
   // trunk), people's heads 0.17 m or more below it (simulated), 0.26 m or more (real KITTI's
   // labelled pedestrians and cyclists): 0.08 leaves room for a fit 0.02-0.05 m off.
   double person_top_beam_margin_m = 0.08;

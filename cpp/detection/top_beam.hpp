@@ -2,9 +2,9 @@
 // The LiDAR's highest beam, fitted to the scan: where it runs, an object's highest return
 // is where the field of view ends, not the object's top. A pole or a tree trunk near the
 // sensor is cut flat there (1.9-2.2 m above the road at 6-12 m) and would pass the person
-// height test; a person's head lies below it: 0.17 m and more on 15 simulated sequences, 0.26 m and
-// more for real KITTI's labelled pedestrians and cyclists (docs/detection.md, "Posts cut by
-// the top beam").
+// height test; a person's head lies below it: 0.17 m and more on 7 simulated sequences,
+// 0.26 m and more for real KITTI's labelled pedestrians and cyclists (docs/detection.md,
+// "Posts cut by the top beam").
 //
 // The beam is a cone about the sensor's axis: in the camera frame c its height is
 // up = a + b r + c x + d z (r the horizontal range; b = tan of its elevation; c, d the small
