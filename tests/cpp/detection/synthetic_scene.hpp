@@ -49,6 +49,18 @@ inline double hit_box(const Vec3& d, const SceneBox& b, const SceneRoad& road) {
   return t_in <= t_out && t_in > 0 ? t_in : std::numeric_limits<double>::infinity();
 }
 
+// A person's body up to the shoulders (1.5 m; add head_on for the head): `across` m wide
+// across the line of sight (yaw 0: length along x), `depth` m along it.
+inline SceneBox person_body(double x, double z, double across = 0.5, double depth = 0.3) {
+  SceneBox body;
+  body.x = x;
+  body.z = z;
+  body.length = across;
+  body.width = depth;
+  body.height = 1.5;
+  return body;
+}
+
 // A head (0.2 m wide, 0.25 m tall) standing on `body`'s top: people are narrower at the top
 // than at the shoulders, which tells them from posts (person_outline.hpp).
 inline SceneBox head_on(const SceneBox& body) {

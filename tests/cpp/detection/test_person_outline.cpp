@@ -17,12 +17,7 @@ using namespace twistslam::detection;
 using namespace twistslam::test_scenes;
 
 TEST(PersonOutline, APersonsHeadIsNarrowerThanTheShouldersAPostsTopIsNot) {
-  SceneBox body;
-  body.x = 1.5;
-  body.z = 9.0;
-  body.length = 0.5;  // across the line of sight (yaw 0: length along x): the shoulders
-  body.width = 0.3;
-  body.height = 1.5;
+  const SceneBox body = person_body(1.5, 9.0);  // shoulders 0.5 m across the line of sight
   const Points3 person_scan = cast_scene({body, head_on(body)});
   const Points3 trunk_scan = cast_scene({post(1.5, 7.0, 0.35, 5.0)});
   auto outline_of = [](const Points3& scan) {
@@ -46,12 +41,7 @@ TEST(PersonOutline, APersonsHeadIsNarrowerThanTheShouldersAPostsTopIsNot) {
 }
 
 TEST(PersonOutline, PolesAndTrunksCutByTheTopBeamAreNoPeopleWhileAPersonStays) {
-  SceneBox body;
-  body.x = 2.0;
-  body.z = 10.0;
-  body.length = 0.6;
-  body.width = 0.5;
-  body.height = 1.5;
+  const SceneBox body = person_body(2.0, 10.0, 0.6, 0.5);
   const SceneBox pole = post(-2.0, 6.0, 0.15, 4.0), trunk = post(3.5, 7.5, 0.35, 5.0);
   const Points3 scan = cast_scene({body, head_on(body), pole, trunk});
   const DetectorResult r = detect(scan);

@@ -81,12 +81,7 @@ TEST(TopBeam, AnOpenRoadHasNoBeamToJudgeBy) {
 }
 
 TEST(TopBeam, APostCutByTheBeamIsNoPersonWhileAPersonStays) {
-  SceneBox body;
-  body.x = 2.5;
-  body.z = 12.0;
-  body.length = 0.5;
-  body.width = 0.3;
-  body.height = 1.5;
+  const SceneBox body = person_body(2.5, 12.0);
   const SceneBox pole = post(-3.0, 6.5, 0.12, 5.0);  // cut at 1.73 + 7.2 tan(2 deg) = 1.98 m
   std::vector<SceneBox> scene = street_facades();
   scene.push_back(body);
