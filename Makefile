@@ -8,6 +8,11 @@ TORCH_VERSION := 2.13.0
 # pip's CMake 4 refuses Debian's old config files without this policy floor.
 export CMAKE_POLICY_VERSION_MINIMUM := 3.5
 export CMAKE_BUILD_PARALLEL_LEVEL ?= 2
+# The same C++ compiler name for the Python extension and the C++ test builds (scikit-build-core
+# calls it g++, a bare CMake c++): ccache keys on the name, so with one name the test build's
+# copies of the core libraries come out of the cache instead of being compiled twice. make's
+# default CXX is g++; a CXX set in the environment wins.
+export CXX
 
 # Debian packages the C++ core builds against (libpcl-dev with its recommends: VTK, MPI).
 APT_PACKAGES := build-essential ccache libeigen3-dev libceres-dev libopencv-dev libpcl-dev libgtest-dev
