@@ -87,7 +87,8 @@ test-sanitizers: apt .stamp-venv
 	  --parallel $(CMAKE_BUILD_PARALLEL_LEVEL)
 
 # Both cores, one test file per worker at a time (loadfile: a module's fixtures are built once):
-# 293 -> 210 s on this 2-core machine (2026-12-06); the ten slowest tests are listed.
+# 293 -> 190 s on this 2-core machine (2026-12-06; the slowest files first, conftest.py); the ten
+# slowest tests are listed.
 PYTEST_WORKERS ?= 2
 test-python: build
 	$(PY) -m pytest tests/python -q -n $(PYTEST_WORKERS) --dist loadfile --durations=10

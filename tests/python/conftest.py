@@ -72,3 +72,13 @@ def kitti_object() -> Path:
 def ab3dmot_outputs() -> Path:
     """AB3DMOT's tracking outputs on the validation sequences (raw/ and thresholded/)."""
     return require_real_data("ab3dmot")
+
+
+#: The longest test files (make test's --durations): collected first, so that with
+#: `pytest -n 2 --dist loadfile` they start at once instead of running alone at the end.
+SLOW_FILES_FIRST = ("test_notebooks.py", "test_visual_objects.py", "test_lidar_objects.py")
+
+
+def pytest_collection_modifyitems(config, items):
+    rank = {name: i for i, name in enumerate(SLOW_FILES_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))  # stable: file order kept
