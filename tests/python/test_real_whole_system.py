@@ -1,8 +1,8 @@
 """The whole system on real KITTI 0001 from stereo + LiDAR, with the classical detector (what
 runs with no weights and no precomputed files) and with the PointRCNN detection files; masks
-from the boxes, DIS flow (issues 10 and 11). The sequence as recorded, then the same real frames replayed as the ego would see them
-had it stopped for a while (one frame repeated), and at 5 Hz (every other frame: twice the
-motion between frames). Each run must track every labelled car within 30 m, keep the camera
+from the boxes, DIS flow (issues 10 and 11). The sequence as recorded, then the same real
+frames replayed as the ego would see them had it stopped for a while (one frame repeated), and
+at 5 Hz (every other frame: twice the motion between frames). Each run must track every labelled car within 30 m, keep the camera
 on the oxts path, and hold still while the ego stands.
 
 The variants are folders of links to the real files (nothing copied), with the labels, oxts and
@@ -114,9 +114,10 @@ def test_every_labelled_car_within_30_m_is_tracked(runs, name, detector):
     coverage = car_coverage(labels, reported)
     min_frames = int(np.ceil(MIN_SEEN_S * VARIANTS[name][1]))
     evaluated = {car: c for car, c in coverage.items() if c[0] >= min_frames}
-    assert len(evaluated) >= 5, f"{name}, {detector}: only {len(evaluated)} labelled cars evaluated"
+    run_name = f"{name}, {detector}"
+    assert len(evaluated) >= 5, f"{run_name}: only {len(evaluated)} labelled cars evaluated"
     for car, (seen, covered) in evaluated.items():
-        assert covered >= 0.9 * seen, f"{name}, {detector}: car {car} covered in {covered} of {seen} frames"
+        assert covered >= 0.9 * seen, f"{run_name}: car {car} covered in {covered} of {seen}"
 
 
 @pytest.mark.parametrize("name", list(VARIANTS))
