@@ -2,8 +2,9 @@
 runs with no weights and no precomputed files) and with the PointRCNN detection files; masks
 from the boxes, DIS flow (issues 10 and 11). The sequence as recorded, then the same real
 frames replayed as the ego would see them had it stopped for a while (one frame repeated), and
-at 5 Hz (every other frame: twice the motion between frames). Each run must track every labelled car within 30 m, keep the camera
-on the oxts path, and hold still while the ego stands.
+at 5 Hz (every other frame: twice the motion between frames). Each run must track every
+labelled car within 30 m, keep the camera on the oxts path, and hold still while the ego
+stands.
 
 The variants are folders of links to the real files (nothing copied), with the labels, oxts and
 detections renumbered."""
