@@ -87,8 +87,9 @@ test-sanitizers: apt .stamp-venv
 	  --parallel $(CMAKE_BUILD_PARALLEL_LEVEL)
 
 # Both cores, one test file per worker at a time (loadfile: a module's fixtures are built once):
-# 293 -> 190 s on this 2-core machine (2026-12-06; the slowest files first, conftest.py); the ten
-# slowest tests are listed.
+# 293 -> 190 s on this 2-core machine (2026-12-06; the slowest files first, conftest.py; with the
+# demo's simulated sequence cached, which a clean clone's notebook test simulates first: 228-268 s);
+# the ten slowest tests are listed.
 PYTEST_WORKERS ?= 2
 test-python: build
 	$(PY) -m pytest tests/python -q -n $(PYTEST_WORKERS) --dist loadfile --durations=10
