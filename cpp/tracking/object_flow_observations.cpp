@@ -14,8 +14,11 @@
 // refined by Lucas-Kanade from the point's last pixel (flow_observations_lk_max_px). By
 // default every cluster whose origin lies beyond 20 m gets them (ObjectTrackingOptions): a
 // lead car's rear-face keypoints live 2-3 frames of the window, and without points that live
-// on its object frame slid along its body. Not for a track with a canonical (box) frame: its
-// boxes place it, and the classical row's urban s8 gained a ghost with them.
+// on its object frame slid along its body. Nearer, only a cluster with fewer matches than the
+// twist LM's inliers gets them (flow_observations_near_below_matches): a car mostly hidden
+// behind a nearer one at 17 m (crowded s12's car 77) showed 2-6 matches a frame, failed and
+// was re-seeded every other frame, its re-seeds not reported. Not for a track with a canonical
+// (box) frame: its boxes place it, and the classical row's urban s8 gained a ghost with them.
 // docs/visual_objects.md has the figures.
 #include <algorithm>
 #include <cmath>
@@ -62,9 +65,11 @@ std::vector<ObjectTracker::FlowObservation> ObjectTracker::flow_observations(
     const objects::ObjectCluster& cluster, const std::vector<Match>& matches, int instance,
     double depth_m, bool canonical) const {
   std::vector<FlowObservation> out;
-  const int below = options_.flow_observations_below_matches;
+  const int below = depth_m >= options_.flow_observations_min_depth_m
+                        ? options_.flow_observations_below_matches
+                        : options_.flow_observations_near_below_matches;
   if (below <= 0 || canonical || static_cast<int>(matches.size()) >= below || instance <= 0 ||
-      flow_.empty() || instances_.empty() || depth_m < options_.flow_observations_min_depth_m)
+      flow_.empty() || instances_.empty())
     return out;
   const bool stereo = options_.flow_observations_stereo && !gray_left_.empty();
   std::vector<std::uint8_t> support;

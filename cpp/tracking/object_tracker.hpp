@@ -141,7 +141,8 @@ class ObjectTracker : public ObjectBundleTerms {
                                     objects::ClusterInstanceEvidence* evidence) const;
   // Step 3, a cluster depth_m away (its predicted origin, camera z) beyond
   // flow_observations_min_depth_m with fewer keypoint matches than
-  // flow_observations_below_matches, without a canonical frame: its
+  // flow_observations_below_matches (nearer: than flow_observations_near_below_matches),
+  // without a canonical frame: its
   // unmatched points seen in the last frame at their flow-predicted pixels on its instance,
   // with a SAD scan's disparity where it finds one (object_flow_observations.cpp).
   std::vector<FlowObservation> flow_observations(const objects::ObjectCluster& cluster,

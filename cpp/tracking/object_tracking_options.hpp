@@ -55,6 +55,8 @@ struct ObjectTrackingOptions {
   // in the last frame join the twist LM (0: off; 1000, above max_points: every cluster)
   int flow_observations_below_matches = 1000;
   double flow_observations_min_depth_m = 20;  // ... when its origin lies at least this far (m)
+  // nearer than that: fewer keypoint matches than this (0: off), too few for the twist LM
+  int flow_observations_near_below_matches = 6;
   // ... each with the depth of a SAD scan at its pixel on its instance's pixels, when the scan
   // finds one (a stereo observation: it sees motion along the line of sight; else mono)
   bool flow_observations_stereo = true;
@@ -192,6 +194,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("min_inliers", o.min_inliers, 3, 100000);  // 3 points fix a rigid motion
   visit("flow_observations_below_matches", o.flow_observations_below_matches, 0, 100000);
   visit("flow_observations_min_depth_m", o.flow_observations_min_depth_m, 0.0, 10000.0);
+  visit("flow_observations_near_below_matches", o.flow_observations_near_below_matches, 0, 100000);
   visit("flow_observations_stereo", o.flow_observations_stereo, 0, 1);
   visit("flow_observations_lk_max_px", o.flow_observations_lk_max_px, 0.0, 1000.0);
   visit("max_step_m", o.max_step_m, 0.01, 1000.0);

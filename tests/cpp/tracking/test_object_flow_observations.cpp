@@ -1,8 +1,9 @@
 // Flow observations (tracking/object_flow_observations.cpp): a cluster whose keypoints are
 // never found again (new descriptors every frame, as a far car's small corners) is tracked by
 // the flow-predicted pixels of its points when flow_observations_below_matches is on and it
-// lies beyond flow_observations_min_depth_m (the default: every cluster beyond 20 m), and
-// re-seeded frame after frame otherwise.
+// lies beyond flow_observations_min_depth_m (the default: every cluster beyond 20 m), or
+// nearer with fewer matches than flow_observations_near_below_matches (the default: fewer
+// than the twist LM needs), and re-seeded frame after frame otherwise.
 #include <gtest/gtest.h>
 
 #include <iostream>
@@ -35,6 +36,7 @@ struct FlowObservations : TrackerScene {
 TEST_F(FlowObservations, AClusterWithoutRepeatableKeypointsIsTrackedByItsFlow) {
   tracking::ObjectTrackingOptions off;
   off.flow_observations_below_matches = 0;
+  off.flow_observations_near_below_matches = 0;
   // the premise: no keypoint is found again, so every frame fails and re-seeds
   const objects::ObjectTrack reseeded = run(off);
   EXPECT_LE(reseeded.hits, 1);
@@ -61,11 +63,22 @@ TEST_F(FlowObservations, AClusterWithoutRepeatableKeypointsIsTrackedByItsFlow) {
   EXPECT_LE(run(far_only).hits, 1);
   far_only.flow_observations_min_depth_m = 25.0;
   EXPECT_GE(run(far_only).hits, kFrames - 1);
+  // ... unless it has fewer keypoint matches than flow_observations_near_below_matches (here
+  // none: every descriptor is new)
+  tracking::ObjectTrackingOptions starved = far_only;
+  starved.flow_observations_min_depth_m = 40.0;
+  starved.flow_observations_near_below_matches = 1;
+  EXPECT_GE(run(starved).hits, kFrames - 1);
   // the defaults: on for every cluster beyond 20 m, so this car at 30 m is tracked (no stereo
-  // pair here: mono observations at the flow's pixels)
+  // pair here: mono observations at the flow's pixels), and for nearer ones short of the
+  // twist LM's inliers
   const tracking::ObjectTrackingOptions defaults;
   EXPECT_GT(defaults.flow_observations_below_matches, 0);
   EXPECT_GE(run(defaults).hits, kFrames - 1);
+  EXPECT_EQ(defaults.flow_observations_near_below_matches, defaults.min_inliers);
+  tracking::ObjectTrackingOptions near_defaults;
+  near_defaults.flow_observations_min_depth_m = 40.0;
+  EXPECT_GE(run(near_defaults).hits, kFrames - 1);
 }
 
 }  // namespace
