@@ -25,12 +25,11 @@ GicpScan make_gicp_scan(const Eigen::Ref<const Points3>& points, int num_neighbo
       ++scan.num_dropped_non_finite;
   }
   scan.tree = KdTree(scan.points);
-  if (static_cast<int>(scan.points.size()) >= num_neighbors) {
+  // Only the normals are kept: linearize() uses the covariances' closed-form pair information
+  // (plane_pair_information), never the 3x3 matrices.
+  if (static_cast<int>(scan.points.size()) >= num_neighbors)
     scan.normals = plane_normals(scan.points, scan.tree, num_neighbors, &scan.neighborhoods,
                                  &scan.grid);
-    scan.covariances.reserve(scan.normals.size());
-    for (const Vec3& n : scan.normals) scan.covariances.push_back(plane_covariance(n));
-  }
   return scan;
 }
 

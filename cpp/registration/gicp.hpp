@@ -18,20 +18,21 @@ namespace twistslam::registration {
 // the scan of frame i serves as the target at i and as the source at i + 1.
 struct GicpScan {
   std::vector<Vec3> points;
-  std::vector<Mat3> covariances;  // empty when the scan has too few points
-  std::vector<Vec3> normals;      // covariances[i] = plane_covariance(normals[i]); same size
+  // Each point's plane normal (its covariance is plane_covariance(normal)); empty when the scan
+  // has too few points.
+  std::vector<Vec3> normals;
   Neighborhoods neighborhoods;    // each point's num_neighbors nearest (correspondence search)
   PointGrid grid;                 // the points by voxel (correspondences not found nearby)
   KdTree tree;
   int num_neighbors = 0;
   int num_dropped_non_finite = 0;  // NaN / Inf rows left out of `points`
 
-  // True when there are covariances, i.e. at least num_neighbors finite points.
-  bool usable() const { return !covariances.empty(); }
+  // True when there are normals (covariances), i.e. at least num_neighbors finite points.
+  bool usable() const { return !normals.empty(); }
 };
 
 // Builds a scan from (N, 3) points (m); NaN / Inf rows are dropped and counted. With fewer than
-// num_neighbors finite points the scan is returned without covariances (usable() false).
+// num_neighbors finite points the scan is returned without normals (usable() false).
 // Throws std::invalid_argument when num_neighbors < 3.
 GicpScan make_gicp_scan(const Eigen::Ref<const Points3>& points, int num_neighbors);
 

@@ -177,7 +177,8 @@ TEST(Gicp, InformationEqualsTheDenseGaussNewtonHessian) {
     if (nn.index < 0) continue;
     Eigen::Matrix<double, 3, 6> J;
     J << -Mat3::Identity(), geometry::hat(q);
-    const Mat3 W = (t.covariances[nn.index] + R * s.covariances[i] * R.transpose()).inverse();
+    const Mat3 W = (plane_covariance(t.normals[nn.index]) +
+                    R * plane_covariance(s.normals[i]) * R.transpose()).inverse();
     H += J.transpose() * W * J;
     ++inliers;
   }
