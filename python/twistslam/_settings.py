@@ -5,6 +5,7 @@ names the key and what was expected."""
 
 from __future__ import annotations
 
+import functools
 import types
 import typing
 from dataclasses import field
@@ -12,6 +13,14 @@ from typing import Any, Union
 
 _TRUE = {"true", "yes", "on", "1"}
 _FALSE = {"false", "no", "off", "0"}
+
+
+@functools.cache
+def type_hints(cls: type) -> dict[str, Any]:
+    """``typing.get_type_hints(cls)``, resolved once per class: the string annotations
+    (``from __future__ import annotations``) are evaluated by ``compile`` / ``eval`` on every
+    call, and building and overriding a config asked ~1100 times (0.8 s of a run's start)."""
+    return typing.get_type_hints(cls)
 
 
 def _type_name(tp: Any) -> str:

@@ -20,7 +20,6 @@ straight to the core. Their defaults are written here, beside the reason for eac
 from __future__ import annotations
 
 import math
-import typing
 from collections.abc import Iterable, Mapping
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
@@ -28,7 +27,7 @@ from typing import Any
 
 from twistslam._core import slam as _core_slam
 
-from ._settings import coerce, param
+from ._settings import coerce, param, type_hints
 from .config_lidar import PYTHON_ONLY as _LIDAR_PYTHON_ONLY
 from .config_lidar import LidarConfig
 from .config_objects import ObjectsConfig
@@ -357,7 +356,7 @@ class Config:
     def _set(self, dotted: str, value: Any) -> None:
         section_name, _, key = dotted.partition(".")
         section_type = _section_type(section_name)
-        types_ = typing.get_type_hints(section_type)
+        types_ = type_hints(section_type)
         if key not in types_:
             raise ValueError(
                 f"unknown key {dotted!r}; keys of section {section_name!r}: "
@@ -371,7 +370,7 @@ class Config:
             section = getattr(self, name)
             if not isinstance(section, section_type):
                 raise ValueError(f"config section {name!r}: expected {section_type.__name__}")
-            types_ = typing.get_type_hints(section_type)
+            types_ = type_hints(section_type)
             for f in fields(section_type):
                 key = f"{name}.{f.name}"
                 value = coerce(getattr(section, f.name), types_[f.name], key)

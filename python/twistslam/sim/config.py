@@ -7,11 +7,10 @@ edit its fields; nothing else changes the behaviour of a run.
 
 from __future__ import annotations
 
-import typing
 from dataclasses import dataclass, field, fields, is_dataclass, replace
 from typing import Any
 
-from .._settings import coerce
+from .._settings import coerce, type_hints
 
 
 
@@ -223,6 +222,6 @@ def _set(cfg: Any, parts: list[str], value: Any) -> None:
     name = parts[-1]
     if not is_dataclass(target) or name not in {f.name for f in fields(target)}:
         raise ValueError(f"unknown simulator setting {'.'.join(parts)!r}")
-    hints = typing.get_type_hints(type(target))
+    hints = type_hints(type(target))
     value = coerce(value, hints[name], f"simulator setting {'.'.join(parts)!r}")
     setattr(target, name, value)
