@@ -57,7 +57,7 @@ def previews(out: Path, dest: Path, frame: int) -> list[Path]:
 
     from twistslam.datasets import KittiTracking
     from twistslam.geometry import box_corners
-    from twistslam.sim.png16 import read_png16
+    from twistslam.datasets.png16 import read_png16
 
     dest.mkdir(parents=True, exist_ok=True)
     seq = KittiTracking(out, "0000")

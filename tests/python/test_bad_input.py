@@ -25,7 +25,7 @@ from twistslam.datasets import (Calibration, read_calibration, read_detections, 
 from twistslam.demo import demo_config
 from twistslam.pipeline import run
 from twistslam.sim.generate import generate
-from twistslam.sim.png16 import read_png16, write_png16
+from twistslam.datasets.png16 import read_png16, write_png16
 
 from conftest import require_real_data
 

@@ -14,7 +14,7 @@ from twistslam.perception import (DisFlow, FileFlow, TimedStage, flow_source, re
 from twistslam.perception.flow import object_region
 from twistslam.perception.run_stages import Perception
 from twistslam.sim.generate import generate
-from twistslam.sim.png16 import write_png16
+from twistslam.datasets.png16 import write_png16
 
 
 def frame(index, image):

@@ -13,7 +13,7 @@ from twistslam.perception.panoptic_files import (CocoPanopticFiles, SimPanopticF
                                                  read_coco_panoptic, read_sim_panoptic)
 from twistslam.perception.panoptic_source import check_panoptic, panoptic_source
 from twistslam.sim.generate import generate
-from twistslam.sim.png16 import read_png16
+from twistslam.datasets.png16 import read_png16
 
 
 @pytest.fixture(scope="module")

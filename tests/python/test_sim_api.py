@@ -10,7 +10,7 @@ from twistslam.datasets import KittiTracking
 from twistslam.sim.cli import add_sim_parser, main
 from twistslam.sim.config import SimConfig
 from twistslam.sim.generate import generate
-from twistslam.sim.png16 import read_png16
+from twistslam.datasets.png16 import read_png16
 from twistslam.sim.scenario import SCENARIOS, scenario_config
 
 TINY = dict(width=138, height=42, progress=False)

@@ -8,7 +8,7 @@ import pytest
 from twistslam.sim.car_mesh import car_mesh, sample_car_shape
 from twistslam.sim.mesh import read_ply, write_ply
 from twistslam.sim.person_mesh import person_mesh, sample_person_shape
-from twistslam.sim.png16 import read_png16, write_png16
+from twistslam.datasets.png16 import read_png16, write_png16
 
 
 def test_car_meshes_are_watertight_and_fill_their_box():

@@ -11,7 +11,7 @@ from scipy.ndimage import maximum_filter
 from twistslam.datasets import KittiTracking, read_detections, read_labels, read_oxts_poses, read_poses
 from twistslam.geometry import box_iou_2d, project_boxes
 from twistslam.sim.generate import generate
-from twistslam.sim.png16 import read_png16
+from twistslam.datasets.png16 import read_png16
 
 W, H, FRAMES, SEQ = 414, 125, 4, "0003"
 

@@ -12,7 +12,7 @@ from twistslam.sim import extras
 from twistslam.sim.camera_render import Camera, render
 from twistslam.sim.lidar import Lidar
 from twistslam.sim.mesh import rotate
-from twistslam.sim.png16 import encode_png
+from twistslam.datasets.png16 import encode_png
 from twistslam.sim.raycast import GROUP, cast, occluded
 from twistslam.sim.scenario import scenario_config
 from twistslam.sim.textures import MipTexture, fractal_noise

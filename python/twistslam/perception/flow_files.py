@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from twistslam.sim.png16 import read_png16, write_png16
+from twistslam.datasets.png16 import read_png16, write_png16
 
 KITTI_FLOW_SCALE = 64.0  # px -> stored units
 KITTI_FLOW_OFFSET = 2.0**15

@@ -19,7 +19,7 @@ from twistslam.datasets import write_calibration, write_labels, write_oxts, writ
 from twistslam.datasets.objects import ObjectTable
 
 from .mesh import write_ply
-from .png16 import write_png, write_png16
+from twistslam.datasets.png16 import write_png, write_png16
 
 FRAME_FOLDERS = {"image_02": ".png", "image_03": ".png", "velodyne": ".bin", "velodyne_labels": ".label",
                  "panoptic": ".png", "flow_occ": ".png", "flow_noc": ".png", "disparity": ".png"}

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from twistslam.datasets.sensors import MAX_IMAGE_PIXELS
+from .sensors import MAX_IMAGE_PIXELS
 
 
 def _chunk(kind: bytes, data: bytes) -> bytes:
