@@ -26,6 +26,13 @@ def test_the_readers_of_flow_and_panoptic_files_load_no_heavy_dependency():
                         "twistslam.datasets.png16") == []
 
 
+def test_the_command_line_parser_loads_no_open3d():
+    # ``twistslam run ...`` registers the simulator's ``sim`` command: its package is imported,
+    # its ray caster's open3d only when a scene is cast
+    loaded = loaded_after("from twistslam.cli import build_parser\nbuild_parser()")
+    assert "twistslam.sim" in loaded and "open3d" not in loaded
+
+
 def test_the_simulator_still_loads_when_asked_for():
     # the probe itself can tell: a check that always answered [] would pass the two above
     assert "twistslam.sim" in loaded_after("import twistslam.sim")

@@ -11,12 +11,21 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-import open3d as o3d
 
 from .mesh import Mesh
 
 if TYPE_CHECKING:
+    import open3d as o3d
+
     from .objects import MovingObjects
+
+
+def _open3d():
+    """open3d, imported when a scene is first cast: 0.7 s and ~100 MB, which every
+    ``import twistslam.sim`` (the ``twistslam`` command's ``sim`` registration included) paid."""
+    import open3d
+
+    return open3d
 
 #: static material groups, in geometry-id order of the static scene
 STATIC_GROUPS = ("terrain", "road", "sidewalk", "wall", "roof", "trunk", "canopy", "pole", "sign", "rail")
@@ -30,7 +39,7 @@ def tensor_rays(origins: np.ndarray, dirs: np.ndarray) -> o3d.core.Tensor:
     rays = np.empty((len(dirs), 6), np.float32)
     rays[:, :3] = origins
     rays[:, 3:] = dirs
-    return o3d.core.Tensor(rays)
+    return _open3d().core.Tensor(rays)
 
 
 class StaticScene:
@@ -38,7 +47,7 @@ class StaticScene:
     move (parked cars): one scene fewer to cast every ray into."""
 
     def __init__(self, groups: dict[str, Mesh], objects: list[tuple[int, Mesh]] = ()) -> None:
-        self.scene = o3d.t.geometry.RaycastingScene()
+        self.scene = _open3d().t.geometry.RaycastingScene()
         self.mesh_of_group: dict[int, Mesh] = {}
         self.face_attrs: dict[int, np.ndarray] = {}
         group_of_geometry: list[int] = []
@@ -63,15 +72,15 @@ class StaticScene:
         self.group_table = np.append(self.group_of_geometry, np.int16(MISS))
         self.agent_table = np.append(self.agent_of_geometry, np.int32(-1))
         # build the BVH now, in one thread (Open3D builds it on the first query otherwise)
-        self.scene.test_occlusions(o3d.core.Tensor(np.zeros((1, 6), np.float32)))
+        self.scene.test_occlusions(_open3d().core.Tensor(np.zeros((1, 6), np.float32)))
 
 
 def mesh_scene(vertices: np.ndarray, faces: np.ndarray) -> o3d.t.geometry.RaycastingScene:
     """A ray-casting scene of one triangle mesh, committed (its BVH built) at once: Open3D
     builds it on the first query, and two threads must not do that at the same time."""
-    scene = o3d.t.geometry.RaycastingScene()
+    scene = _open3d().t.geometry.RaycastingScene()
     scene.add_triangles(vertices.astype(np.float32), faces.astype(np.uint32))
-    scene.test_occlusions(o3d.core.Tensor(np.zeros((1, 6), np.float32)))
+    scene.test_occlusions(_open3d().core.Tensor(np.zeros((1, 6), np.float32)))
     return scene
 
 
