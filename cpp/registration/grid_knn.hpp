@@ -25,11 +25,17 @@ struct Neighborhoods {
   std::vector<double> radius2_m2;  // points.size()
 };
 
+// The candidate-distance loop's instruction set: the widest this CPU runs (AVX-512 when it has
+// it, checked once at run time; else SSE2, which every x86-64 has), or SSE2 / plain C++ (tests
+// compare the two). Both give the same neighbours: the distances are computed the same way.
+enum class KnnKernel { kWidest, kPortable };
+
 // What the grid did (for tests and profiling).
 struct GridKnnStats {
   double cell_size_m = 0.0;
   int num_cells = 0;
   int num_reach_retries = 0;  // searches repeated with a wider reach
+  bool avx512 = false;        // the AVX-512 kernel ran
 };
 
 // Fills `out` with the k nearest neighbours of every point of `points` (finite; k <=
@@ -37,7 +43,8 @@ struct GridKnnStats {
 // the cells). With `grid`, the grid is handed over there. Throws std::invalid_argument unless
 // 1 <= k <= points.size() == tree.size().
 void all_knn(const std::vector<Vec3>& points, const KdTree& tree, int k, Neighborhoods* out,
-             GridKnnStats* stats = nullptr, PointGrid* grid = nullptr);
+             GridKnnStats* stats = nullptr, PointGrid* grid = nullptr,
+             KnnKernel kernel = KnnKernel::kWidest);
 
 // Sampled points per scan whose KD-tree k-th distance sets the grid's cell size (16 queries:
 // ~5 % of the k-NN time of a 400-point scan).

@@ -71,13 +71,46 @@ std::vector<Vec3> ring_scan(unsigned seed) {
 TEST(GridKnn, EqualsTheKdTreeOnACarLikeRingScan) {
   const std::vector<Vec3> points = ring_scan(3);
   const KdTree tree(points);
-  for (int k : {5, 20, 30}) {
-    Neighborhoods hood;
-    GridKnnStats stats;
-    all_knn(points, tree, k, &hood, &stats);
-    EXPECT_GT(stats.cell_size_m, 0.0);
-    EXPECT_LE(stats.num_cells, 8 * static_cast<int>(points.size()));
-    expect_same_as_tree(points, tree, k, hood);
+  for (KnnKernel kernel : {KnnKernel::kWidest, KnnKernel::kPortable})
+    for (int k : {5, 20, 30}) {
+      Neighborhoods hood;
+      GridKnnStats stats;
+      all_knn(points, tree, k, &hood, &stats, nullptr, kernel);
+      EXPECT_GT(stats.cell_size_m, 0.0);
+      EXPECT_LE(stats.num_cells, 8 * static_cast<int>(points.size()));
+      expect_same_as_tree(points, tree, k, hood);
+    }
+}
+
+// The AVX-512 kernel (where the CPU has it) and the portable one give every point the same
+// neighbour set and radius, bit for bit: only the order within a set may differ. Rows of 0 to
+// 40+ candidates cover the 16-wide loop, its remainder and rows shorter than one register.
+TEST(GridKnn, WideAndPortableKernelsGiveTheSameNeighbourhoods) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  std::vector<Vec3> points = ring_scan(9);
+  for (int i = 0; i < 700; ++i) points.push_back(Vec3(u(rng), 0.3 * u(rng), u(rng)) + Vec3(5, 0, 20));
+  const KdTree tree(points);
+  for (int k : {4, 20, 33}) {
+    Neighborhoods wide, portable;
+    GridKnnStats wide_stats, portable_stats;
+    all_knn(points, tree, k, &wide, &wide_stats, nullptr, KnnKernel::kWidest);
+    all_knn(points, tree, k, &portable, &portable_stats, nullptr, KnnKernel::kPortable);
+    EXPECT_FALSE(portable_stats.avx512);
+#if defined(__x86_64__) && defined(__GNUC__)
+    EXPECT_EQ(wide_stats.avx512, static_cast<bool>(__builtin_cpu_supports("avx512f")));
+#endif
+    EXPECT_EQ(wide_stats.num_reach_retries, portable_stats.num_reach_retries);
+    EXPECT_EQ(wide.radius2_m2, portable.radius2_m2);
+    int differing = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      std::vector<int> a(wide.indices.begin() + i * k, wide.indices.begin() + (i + 1) * k);
+      std::vector<int> b(portable.indices.begin() + i * k, portable.indices.begin() + (i + 1) * k);
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      differing += a != b;
+    }
+    EXPECT_EQ(differing, 0) << "k = " << k;
   }
 }
 
@@ -121,9 +154,10 @@ TEST(GridKnn, SelectionIsExactWhereTheDensityJumpsAndOnALattice) {
     for (int y = 0; y < 8; ++y)
       for (int z = 0; z < 4; ++z) points.push_back(Vec3(x, y, z) * 0.1 + Vec3(-2.0, 0, 0));
   const KdTree tree(points);
-  for (int k : {3, 8, 20, 45}) {
-    Neighborhoods hood;
-    all_knn(points, tree, k, &hood);
-    expect_same_as_tree(points, tree, k, hood);
-  }
+  for (KnnKernel kernel : {KnnKernel::kWidest, KnnKernel::kPortable})
+    for (int k : {3, 8, 20, 45}) {
+      Neighborhoods hood;
+      all_knn(points, tree, k, &hood, nullptr, nullptr, kernel);
+      expect_same_as_tree(points, tree, k, hood);
+    }
 }
