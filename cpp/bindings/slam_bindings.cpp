@@ -54,6 +54,13 @@ py::list objects_to_list(const t::ObjectTracker& tracker) {
     }
     d["points_o"] = X;
     d["point_found"] = found;
+    // the points it culled while tracked, each confirmed in two frames or more (kept for the
+    // final smoothing; empty without it): faces an earlier view showed
+    const auto& retired = tracker.clusters()[c].retired;
+    DoubleArray R = new_array({static_cast<py::ssize_t>(retired.size()), 3});
+    for (size_t i = 0; i < retired.size(); ++i)
+      for (int k = 0; k < 3; ++k) R.mutable_data()[3 * i + k] = retired[i].X_o[k];
+    d["retired_points_o"] = R;
     out.append(d);
   }
   return out;

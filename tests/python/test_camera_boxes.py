@@ -194,3 +194,32 @@ def test_the_output_and_the_live_view_box_of_a_cluster():
         assert abs(T_o_box[0, 2]) > 0.99  # its length along the object's z
         # the seen rear face stays 1.5 m before the origin; the box grows away from the camera
         assert T_o_box[:3, 3] == pytest.approx([0.0, 0.0, -1.5 + 2.0], abs=0.1)
+
+
+def test_a_camera_only_box_counts_the_points_its_track_culled():
+    """The points a track culled while tracked (``retired_points_o``) hold the faces its earlier
+    views showed: the box is fitted to them with the live ones. Here the live points at the
+    track's end are a few on the rear face plus a clump 3.5 m before it (towards the camera);
+    the retired ones cover the rear and the side."""
+    rng = np.random.default_rng(4)
+    u = rng.uniform(-0.5, 0.5, (2, 200))
+    rear = np.column_stack([1.7 * u[0], 1.4 * u[1], np.full(200, -2.0)])
+    side = np.column_stack([np.full(200, -0.85), 1.4 * u[1], -2.0 + 4.2 * (u[0] + 0.5)])
+    live = np.vstack([rear[:8], rear[8:18] + [0.0, 0.0, -3.5]])
+    frames = np.arange(3)
+    T_w_o = np.repeat(np.eye(4)[None], 3, axis=0)
+    T_w_o[:, :3, 3] = [0.0, 0.0, 16.0]
+    cameras = {int(f): np.eye(4) for f in frames}
+    cluster = {"frames": frames, "T_w_o": T_w_o, "points_o": live, "class_id": 26,
+               "canonical": False, "size": np.zeros(3)}
+    T_live, size_live, _ = cluster_box(cluster, cameras)
+    T_all, size_all, _ = cluster_box({**cluster, "retired_points_o": np.vstack([rear, side])},
+                                     cameras)
+    # the car spans z in [-2.0, 2.2] of its object frame, its centre at z = 0.1
+    assert abs(T_live[2, 3] - 0.1) > 1.5  # the live clump drags the box off the car
+    # on the car (the 5-95 % extents trim its faces' outer points a little)
+    assert np.linalg.norm(T_all[[0, 2], 3] - [0.0, 0.1]) < 0.3
+    assert size_all[0] == pytest.approx(4.2, abs=0.5) and size_all[1] == pytest.approx(1.7, abs=0.2)
+    # no retired points (a run without the final smoothing): the live points alone, as before
+    T_empty, _, _ = cluster_box({**cluster, "retired_points_o": np.zeros((0, 3))}, cameras)
+    assert np.allclose(T_empty, T_live)

@@ -56,6 +56,31 @@ def test_objects_are_written_in_the_kitti_tracking_format(result, tmp_path):
     assert any(k.endswith("/points_o") and len(points[k]) >= 10 for k in points.files)
 
 
+def test_the_core_hands_each_cluster_its_live_and_retired_points(sim, monkeypatch):
+    """``Slam.objects()`` gives every cluster ``points_o`` and ``retired_points_o`` (the points
+    it culled while tracked, which its camera-only box is fitted to as well), (M, 3) float64."""
+    import twistslam.pipeline as pipeline
+
+    seen = []
+
+    def spy(clusters, *args, **kwargs):
+        seen.extend(clusters)
+        return visual_objects(clusters, *args, **kwargs)
+
+    visual_objects = pipeline.visual_objects
+    monkeypatch.setattr(pipeline, "visual_objects", spy)
+    twistslam.run(KittiTracking(sim, "0000"), {"run": {"max_frames": 10}}, progress=False,
+                  segmentation="files", flow="files")
+    assert seen
+    retired = 0
+    for cluster in seen:
+        for key in ("points_o", "retired_points_o"):
+            points = np.asarray(cluster[key])
+            assert points.dtype == np.float64 and points.ndim == 2 and points.shape[1] == 3
+        retired += len(cluster["retired_points_o"])
+    assert retired > 0  # ten frames cull some points of the cars tracked
+
+
 def test_no_segmentation_no_objects(sim):
     r = twistslam.run(KittiTracking(sim, "0000"), {"run": {"max_frames": 3}}, progress=False,
                       segmentation="none")

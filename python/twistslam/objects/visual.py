@@ -136,7 +136,8 @@ def cluster_box(cluster: dict, camera_poses: dict[int, np.ndarray],
                 box_rules: CameraBoxRules = CameraBoxRules()) -> tuple[np.ndarray, np.ndarray, bool]:
     """``(T_o_box, size, canonical)`` of one of the core's clusters (``Slam.objects()``), with
     the camera poses (frame -> T_w_c) of its rows so far: a track with a canonical frame (a
-    3D box's) and sizes is its own box; any other gets a box fitted to its points, its front
+    3D box's) and sizes is its own box; any other gets a box fitted to its points (``points_o``
+    and, when given, ``retired_points_o``: the ones it culled while tracked), its front
     where it drove or by the road side's rule, a car its full extent (:mod:`.camera_boxes`).
     What the run's output and the live view both draw."""
     frames = np.asarray(cluster["frames"])
@@ -144,7 +145,15 @@ def cluster_box(cluster: dict, camera_poses: dict[int, np.ndarray],
     if bool(cluster.get("canonical")) and bool((np.asarray(cluster["size"]) > 0).all()):
         # the object frame is its first detection's box frame; size: the boxes' median
         return np.eye(4), np.asarray(cluster["size"], dtype=np.float64), True
+    # the box is fitted to every point the track confirmed, as its re-centring's median: the
+    # ones it culled too (``retired_points_o``), which hold the faces earlier views showed. The
+    # live points alone can be a handful at the track's end (crowded s1's car 17: 19 points,
+    # more than half 3-4 m off its rear face, a 6.1 m box centred 2 m before the car). 10
+    # simulated sequences, camera rows: 3D TP 80.9 -> 83.8 %, MOTP 57.2 -> 57.7 %; real 0001
+    # camera alone: 3D MOTA 95.8 -> 100 %, 3D MOTP 55.3 -> 55.9 %
     points = np.asarray(cluster["points_o"]).reshape(-1, 3)
+    retired = np.asarray(cluster.get("retired_points_o", np.zeros((0, 3)))).reshape(-1, 3)
+    points = np.vstack([points, retired])
     heading = travel_heading(T_w_o, frames, box_rules.min_travel_m, box_rules.min_straightness)
     T_o_box, size = box_from_points(points, heading)
     if heading is None and road_side_turns_around(T_w_o @ T_o_box, frames, camera_poses,
