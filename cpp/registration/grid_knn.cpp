@@ -229,6 +229,10 @@ void all_knn(const std::vector<Vec3>& points, const KdTree& tree, int k, Neighbo
     zs[s] = static_cast<float>(grid.points[s][2] - grid.origin[2]);
   }
   const Vec3& origin = grid.origin;
+  // every point lies within the grid's box, so within its diagonal of any point
+  const float whole_grid_reach = static_cast<float>(
+      cell * std::sqrt(static_cast<double>(dims[0]) * dims[0] + static_cast<double>(dims[1]) * dims[1] +
+                       static_cast<double>(dims[2]) * dims[2])) + cell_f;
 
   // (float bits of d2) << 32 | index: positive floats order like their bits, so one integer
   // comparison ranks by distance (ties by index) in nth_element.
@@ -276,6 +280,10 @@ void all_knn(const std::vector<Vec3>& points, const KdTree& tree, int k, Neighbo
                           keys.data(), kept);
         }
       if (kept >= k) break;
+      // A reach past the grid's diagonal holds every point (k <= n): a kernel that still
+      // counts fewer than k is broken, and growing on would never end.
+      if (reach > whole_grid_reach)
+        throw std::logic_error("all_knn: a reach over the whole grid kept fewer than k points");
       reach = reach < sure_reach ? sure_reach : std::max(reach * kReachGrowth, cell_f);
       ++retries;
     }
