@@ -231,16 +231,17 @@ dict
                              "num_fits"_a = r.num_fits(), "last_inliers"_a = r.last_inliers());
            },
            R"doc(The road plane that gives the planar link's normal, fitted (RANSAC + SVD) to the
-stereo keypoints labelled ``visual_objects.road_class_id`` of every keyframe, and with
-``visual_objects.road_lidar_points`` the scan's returns on road pixels away from the mask
-boundary.
+stereo keypoints labelled ``visual_objects.road_class_id`` of the keyframes within
+``visual_objects.road_plane_window_m`` of the newest one (0: of every keyframe, a reservoir),
+and with ``visual_objects.road_lidar_points`` the scan's returns on road pixels away from the
+mask boundary.
 
 Returns
 -------
 dict
     valid : bool, a fit was accepted (otherwise ``plane`` is the prior: the first camera's up,
     1.65 m below it); plane : (4,) float64 (n, d), n . X_w + d = 0 on the road, n pointing up;
-    num_points : int, road points in the reservoir; num_fits, last_inliers : int.)doc")
+    num_points : int, road points in the reservoir (the window); num_fits, last_inliers : int.)doc")
       .def("trajectory",
            [](t::System& s) {
              finish_ba(s);

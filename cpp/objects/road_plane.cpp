@@ -1,5 +1,6 @@
 #include "objects/road_plane.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -11,8 +12,9 @@ RoadPlaneEstimator::RoadPlaneEstimator(const RoadPlaneOptions& options)
   if (!o.prior_up.allFinite() || o.prior_up.norm() < 1e-9 || !std::isfinite(o.prior_height) ||
       o.max_points < 3 || o.min_points < 3 || o.min_inliers < 3 || !(o.min_inlier_ratio >= 0) ||
       !(o.refit_growth >= 0) || !(o.max_angle_from_prior_deg > 0) || !(o.fit.inlier_threshold > 0) ||
-      o.fit.iterations < 1)
-    throw std::invalid_argument("RoadPlaneOptions: finite non-zero prior_up, counts >= 3, thresholds > 0");
+      o.fit.iterations < 1 || !(o.window_m >= 0))
+    throw std::invalid_argument("RoadPlaneOptions: finite non-zero prior_up, counts >= 3, thresholds > 0, "
+                                "window_m >= 0");
   options_.prior_up.normalize();
   reservoir_.resize(options_.max_points, 3);
   plane_ = prior_plane();
@@ -23,7 +25,31 @@ Vec4 RoadPlaneEstimator::prior_plane() const {
   return Vec4(n.x(), n.y(), n.z(), options_.prior_height);
 }
 
-void RoadPlaneEstimator::add_points(const Points3& points_w) {
+void RoadPlaneEstimator::add_to_window(const Points3& points_w, const Vec3& camera_w) {
+  if (!camera_w.allFinite()) throw std::invalid_argument("RoadPlaneEstimator: non-finite camera position");
+  Batch batch{Points3(points_w.rows(), 3), camera_w};
+  Eigen::Index n = 0;
+  for (Eigen::Index i = 0; i < points_w.rows(); ++i)
+    if (points_w.row(i).allFinite()) batch.points_w.row(n++) = points_w.row(i);
+  seen_ += n;
+  batch.points_w.conservativeResize(n, 3);
+  window_.push_back(std::move(batch));
+  while ((window_.front().camera_w - camera_w).norm() > options_.window_m) window_.pop_front();
+  // the most recent max_points rows, newest batch first; older batches are dropped (a long
+  // window over a slow drive would otherwise keep every keyframe's points)
+  count_ = 0;
+  std::size_t used = 0;
+  for (auto b = window_.rbegin(); b != window_.rend() && count_ < options_.max_points; ++b, ++used) {
+    const Eigen::Index take = std::min<Eigen::Index>(b->points_w.rows(), options_.max_points - count_);
+    reservoir_.middleRows(count_, take) = b->points_w.bottomRows(take);
+    count_ += take;
+  }
+  while (window_.size() > used) window_.pop_front();
+  if (count_ >= options_.min_points) refit();
+}
+
+void RoadPlaneEstimator::add_points(const Points3& points_w, const Vec3& camera_w) {
+  if (options_.window_m > 0) return add_to_window(points_w, camera_w);
   const Eigen::Index cap = options_.max_points;
   for (Eigen::Index i = 0; i < points_w.rows(); ++i) {
     if (!points_w.row(i).allFinite()) continue;

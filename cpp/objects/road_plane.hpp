@@ -3,8 +3,12 @@
 // loop", gives the normal of the planar mechanical link). World points labelled road are kept
 // in a bounded, deterministic reservoir and the plane is re-fitted whenever the number of points
 // seen has grown by a set fraction since the last fit, so it is re-estimated as the map grows.
+// With window_m > 0 only the batches (keyframes) added within that distance of the newest one's
+// camera are kept instead, and the plane is re-fitted on every batch: the road where the
+// camera is now, which on a long drive over a changing grade is not the plane of the whole map.
 // Until a fit is accepted (enough inliers, normal close to the prior "up") the prior is used.
 #include <cstdint>
+#include <deque>
 #include <random>
 
 #include "geometry/plane_fit.hpp"
@@ -23,6 +27,10 @@ struct RoadPlaneOptions {
   double max_angle_from_prior_deg = 15;  // deg; steeper "roads" are clutter (KITTI slopes < 10 %)
   geometry::PlaneFitOptions fit{0.1, 200, 0};  // 0.1 m: triangulated road points are noisy
   std::uint64_t reservoir_seed = 0;      // deterministic reservoir sampling
+  // 0: the reservoir over every point seen; > 0 (m): the points of the add_points calls whose
+  // camera lies within this distance of the newest call's (the most recent max_points of
+  // them), re-fitted on each call
+  double window_m = 0;
 };
 
 class RoadPlaneEstimator {
@@ -30,8 +38,9 @@ class RoadPlaneEstimator {
   // Throws std::invalid_argument for bad options.
   explicit RoadPlaneEstimator(const RoadPlaneOptions& options = {});
 
-  // Adds world points labelled road (non-finite rows are skipped); re-fits when due.
-  void add_points(const Points3& points_w);
+  // Adds world points labelled road (non-finite rows are skipped), seen from a camera at
+  // camera_w (the window's distance; unused without one); re-fits when due.
+  void add_points(const Points3& points_w, const Vec3& camera_w = Vec3::Zero());
   // Fits now on the current reservoir (also called by add_points when due).
   void refit();
 
@@ -41,16 +50,23 @@ class RoadPlaneEstimator {
   Vec4 plane() const { return plane_; }
   Vec3 normal_up() const { return plane_.head<3>(); }
 
-  int num_points() const { return static_cast<int>(count_); }  // in the reservoir
+  int num_points() const { return static_cast<int>(count_); }  // in the reservoir / window
   std::int64_t points_seen() const { return seen_; }
   int num_fits() const { return num_fits_; }
   int last_inliers() const { return last_inliers_; }
 
  private:
   Vec4 prior_plane() const;
+  void add_to_window(const Points3& points_w, const Vec3& camera_w);
 
   RoadPlaneOptions options_;
   Points3 reservoir_;  // max_points rows, the first count_ filled
+  struct Batch {
+    Points3 points_w;  // its finite rows
+    Vec3 camera_w;
+  };
+  std::deque<Batch> window_;  // window_m > 0: the batches within window_m of the newest
+                              // (at most those holding its newest max_points points)
   Eigen::Index count_ = 0;
   std::int64_t seen_ = 0, seen_at_last_fit_ = 0;
   std::mt19937_64 rng_;

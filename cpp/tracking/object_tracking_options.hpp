@@ -23,6 +23,9 @@ struct ObjectTrackingOptions {
   double road_lidar_max_depth_m = 25;  // m along the optical axis
   int road_lidar_border_px = 3;        // px: the whole (2 b + 1)^2 window must be road
   int road_lidar_max_points = 300;     // returns per keyframe (the plane's reservoir holds 5000)
+  // the road plane from the road points of the keyframes within this distance (m) of the
+  // newest one (0: of every keyframe; config_visual_objects.py has the figures)
+  double road_plane_window_m = 25;
   double flow_radius_px = 4;        // search window around the flow-predicted position
   double projection_radius_px = 12; // ... around the motion-model projection (no flow)
   double refine_radius_px = 3;      // ... of the second pass, around the estimated pose
@@ -170,6 +173,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("road_lidar_points", o.road_lidar_points, 0, 1);
   visit("road_lidar_max_depth_m", o.road_lidar_max_depth_m, 0.5, 10000.0);
   visit("road_lidar_border_px", o.road_lidar_border_px, 0, 100);  // px: 100 is a 201 px window
+  visit("road_plane_window_m", o.road_plane_window_m, 0.0, 1e9);
   visit("road_lidar_max_points", o.road_lidar_max_points, 0, 100000);  // 0: none kept
   visit("flow_radius_px", o.flow_radius_px, 0.0, 2000.0);  // px: 2000 spans any image
   visit("projection_radius_px", o.projection_radius_px, 0.0, 2000.0);

@@ -25,6 +25,13 @@ class StageTimer {
   std::chrono::steady_clock::time_point start_;
 };
 
+// The road plane's options from the visual objects' (the rest are RoadPlaneOptions' defaults).
+objects::RoadPlaneOptions road_plane_options(const ObjectTrackingOptions& o) {
+  objects::RoadPlaneOptions road;
+  road.window_m = o.road_plane_window_m;
+  return road;
+}
+
 }  // namespace
 
 const char* to_string(Status status) {
@@ -46,13 +53,14 @@ System::System(const geometry::StereoCamera& camera, const SlamOptions& options)
       local_mapper_(camera, options, LevelWeights(frame_builder_.extractor().level_sigma2())),
       object_tracker_(camera, options.visual_objects, frame_builder_.extractor().scale_factors(),
                       LevelWeights(frame_builder_.extractor().level_sigma2()),
-                      options.lidar_objects) {}
+                      options.lidar_objects),
+      road_plane_(road_plane_options(options.visual_objects)) {}
 
 void System::reset() {
   local_mapper_.reset();  // drops a pending BA before the map it refers to
   finished_ba_ = FinishedBundleAdjustment();
   map_.clear();
-  road_plane_ = objects::RoadPlaneEstimator();
+  road_plane_ = objects::RoadPlaneEstimator(road_plane_options(options_.visual_objects));
   road_up_w_ = Vec3(0, -1, 0);
   camera_tracker_.reset();
   local_mapper_.reset();
@@ -217,7 +225,7 @@ void System::add_road_points(const Frame& frame, const cv::Mat& labels, const Po
   if (points.empty()) return;
   Points3 rows(static_cast<Eigen::Index>(points.size()), 3);
   for (size_t r = 0; r < points.size(); ++r) rows.row(static_cast<Eigen::Index>(r)) = points[r].transpose();
-  road_plane_.add_points(rows);
+  road_plane_.add_points(rows, T_w_c.topRightCorner<3, 1>());
   if (road_plane_.valid()) road_up_w_ = road_plane_.normal_up();
 }
 

@@ -149,6 +149,34 @@ def test_road_plane_is_fitted_from_the_road_keypoints(sim):
     assert abs(d - 1.65) < 0.05
 
 
+def test_a_road_plane_window_fits_the_last_keyframes_road_points_only(sim):
+    """``visual_objects.road_plane_window_m`` reaches the core: the plane is re-fitted at every
+    keyframe from the road keypoints of the keyframes within that distance, fewer points than
+    the whole map's, and still the simulated road one camera height below the camera."""
+    from twistslam.perception.panoptic_files import read_sim_panoptic
+
+    sequence = KittiTracking(sim, "0000")
+    whole = twistslam.Slam(twistslam.Config(), sequence.calib)
+    window = twistslam.Slam(twistslam.Config().override(["visual_objects.road_plane_window_m=3"]),
+                            sequence.calib)
+    for i in range(10):
+        frame = sequence[i]
+        labels = read_sim_panoptic(sim / "training" / "panoptic" / "0000" / f"{i:06d}.png")
+        whole.track(frame, labels.class_id)
+        window.track(frame, labels.class_id)
+    keyframes = len(window.keyframes()["frame_index"])
+    assert keyframes >= 4
+    camera_w = window.keyframes()["T_w_c"][-1, :3, 3]
+    road, all_road = window.road_plane(), whole.road_plane()
+    assert road["valid"] and all_road["valid"]
+    assert road["num_fits"] == keyframes  # one fit per keyframe (each holds road keypoints)
+    assert 50 <= road["num_points"] < all_road["num_points"] * 0.75
+    n, d = road["plane"][:3], road["plane"][3]
+    assert np.degrees(np.arccos(np.clip(n @ np.array([0.0, -1.0, 0.0]), -1, 1))) < 1.0
+    # the road under the newest keyframe's camera, one camera height below it
+    assert abs(n @ camera_w + d - 1.65) < 0.05
+
+
 def test_rows_reseeded_from_the_instance_are_reported_and_predicted_ones_are_not():
     from twistslam.objects.visual import visual_objects
 

@@ -109,3 +109,59 @@ TEST(RoadPlane, DeterministicAndSkipsNonFinite) {
   EXPECT_EQ(a.plane(), b.plane());
   EXPECT_TRUE(a.valid());
 }
+
+TEST(RoadPlane, AWindowFollowsAGradeChangeTheWholeMapLagsBehind) {
+  // 20 keyframes 1 m apart on level road, then 6 on a 6 % grade: the camera is on the grade now
+  RoadPlaneOptions windowed;
+  windowed.window_m = 4.5;  // the last 5 keyframes
+  RoadPlaneEstimator recent(windowed), whole;
+  unsigned seed = 100;
+  double z = 0;
+  for (int k = 0; k < 20; ++k, z += 1) {
+    const Points3 P = road_points(kPriorUp, 1.65, 400, 0.1, seed++);
+    recent.add_points(P, Vec3(0, 0, z));
+    whole.add_points(P, Vec3(0, 0, z));
+  }
+  EXPECT_LT(angle_deg(recent.normal_up(), kPriorUp), 0.3);
+  const Vec3 grade_up = Vec3(0, -1, 0.06).normalized();
+  for (int k = 0; k < 6; ++k, z += 1) {
+    const Points3 P = road_points(grade_up, 1.65, 400, 0.1, seed++);
+    recent.add_points(P, Vec3(0, 0, z));
+    whole.add_points(P, Vec3(0, 0, z));
+  }
+  ASSERT_TRUE(recent.valid());
+  EXPECT_LT(angle_deg(recent.normal_up(), grade_up), 0.3);
+  EXPECT_NEAR(recent.plane()(3), 1.65, 0.05);
+  // the reservoir over every point seen still holds mostly level road
+  EXPECT_GT(angle_deg(whole.normal_up(), grade_up), 2.0);
+  // the window re-fits on every keyframe, on the last 5 keyframes' points only
+  EXPECT_EQ(recent.num_fits(), 26);
+  EXPECT_EQ(recent.num_points(), 5 * 400);
+  EXPECT_EQ(recent.points_seen(), 26 * 400);
+}
+
+TEST(RoadPlane, AWindowKeepsTheNewestPointsUpToItsCapacityAndSkipsNonFinite) {
+  RoadPlaneOptions o;
+  o.window_m = 100;
+  o.max_points = 1000;
+  RoadPlaneEstimator road(o);
+  road.add_points(road_points(kPriorUp, 1.65, 800, 0.0, 200), Vec3(0, 0, 0));
+  EXPECT_EQ(road.num_points(), 800);
+  Points3 sloped = road_points(kSlopedUp, 1.65, 1200, 0.0, 201);  // more than the capacity
+  sloped(3, 0) = NAN;
+  road.add_points(sloped, Vec3(0, 0, 1));
+  EXPECT_EQ(road.points_seen(), 800 + 1199);
+  EXPECT_EQ(road.num_points(), 1000);  // the newest batch alone fills it
+  ASSERT_TRUE(road.valid());
+  EXPECT_LT(angle_deg(road.normal_up(), kSlopedUp), 0.3);
+  // a batch too small to fit alone, 300 m on: the window drops the rest, the last fit stays
+  road.add_points(road_points(kSlopedUp, 1.65, 10, 0.0, 202), Vec3(0, 0, 301));
+  EXPECT_EQ(road.num_points(), 10);
+  EXPECT_TRUE(road.valid());
+  EXPECT_LT(angle_deg(road.normal_up(), kSlopedUp), 0.3);
+  EXPECT_THROW(road.add_points(road_points(kSlopedUp, 1.65, 10, 0.0, 203), Vec3(0, NAN, 0)),
+               std::invalid_argument);
+  RoadPlaneOptions bad;
+  bad.window_m = -1;
+  EXPECT_THROW(RoadPlaneEstimator{bad}, std::invalid_argument);
+}
