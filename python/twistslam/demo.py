@@ -116,7 +116,10 @@ def cached_sequence(cache: Path, scenario: str = SCENARIO, frames: int = FRAMES,
     if marker.is_file() and json.loads(marker.read_text(encoding="utf-8")) == key:
         shutil.rmtree(partial, ignore_errors=True)  # another process finished first
         return root
-    shutil.rmtree(root, ignore_errors=True)
+    if root.is_symlink():  # a link the user put there: replaced, what it points to left alone
+        root.unlink()
+    else:
+        shutil.rmtree(root, ignore_errors=True)
     partial.rename(root)
     return root
 

@@ -78,3 +78,15 @@ def test_an_old_marker_without_the_simulator_key_regenerates(tmp_path, calls):
     (root / demo.MARKER).write_text(json.dumps(old) + "\n")
     demo.cached_sequence(tmp_path, frames=5, progress=False)
     assert len(calls) == 1
+
+
+def test_a_cache_entry_that_is_a_link_without_a_marker_is_replaced_and_its_target_kept(tmp_path, calls):
+    elsewhere = tmp_path / "elsewhere"
+    (elsewhere / "training").mkdir(parents=True)
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    (cache / "urban-seed0-n5").symlink_to(elsewhere, target_is_directory=True)
+    root = demo.cached_sequence(cache, frames=5, progress=False)
+    assert len(calls) == 1
+    assert not root.is_symlink() and (root / demo.MARKER).is_file()
+    assert (elsewhere / "training").is_dir() and not (elsewhere / demo.MARKER).exists()
