@@ -257,6 +257,20 @@ TEST(Features, DescriptorDistanceIsABitCount) {
   EXPECT_THROW(descriptor_distance(zeros, cv::Mat::zeros(1, 16, CV_8U)), std::invalid_argument);
 }
 
+TEST(Features, Popcount64CountsEveryBitOfTheWord) {
+  EXPECT_EQ(popcount64(0), 0);
+  EXPECT_EQ(popcount64(~std::uint64_t{0}), 64);
+  for (int b = 0; b < 64; ++b) {
+    ASSERT_EQ(popcount64(std::uint64_t{1} << b), 1);
+    ASSERT_EQ(popcount64(~(std::uint64_t{1} << b)), 63);
+  }
+  std::uint64_t x = 0x9E3779B97F4A7C15ULL;  // a scrambled sequence against the builtin
+  for (int i = 0; i < 1000; ++i) {
+    x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+    ASSERT_EQ(popcount64(x), __builtin_popcountll(x));
+  }
+}
+
 TEST(OrbExtractor, InvalidOptionsNameTheOptionAndItsRange) {
   auto message = [](const OrbOptions& o) -> std::string {
     try {
