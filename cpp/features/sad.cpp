@@ -7,6 +7,15 @@
 #include <limits>
 #include <vector>
 
+// The cost loops over the disparities vectorise; GCC builds them for baseline x86-64 (SSE2,
+// 4 floats) and AVX2 (8), and the loader picks the widest this CPU runs. Every disparity's sum
+// keeps its order (no FMA: avx2 alone does not enable it), so both give the same costs.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+#define TWISTSLAM_SAD_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define TWISTSLAM_SAD_CLONES
+#endif
+
 namespace twistslam::features {
 
 namespace {
@@ -53,8 +62,8 @@ float supported_left(const cv::Mat& L, int xl, int y, int half_width, int half_h
 // the right band (rows of `span` floats) at every offset d in [0, num): cost[d]. Two passes
 // over the pixels, each a contiguous loop over d: the right windows' means over the same
 // pixels, then the absolute differences.
-void supported_costs(const float* left, const SupportPixels& used, int cols, const float* band,
-                     int span, int num, float* cost) {
+TWISTSLAM_SAD_CLONES void supported_costs(const float* left, const SupportPixels& used, int cols,
+                                          const float* band, int span, int num, float* cost) {
   if (num <= 0) return;
   thread_local std::vector<float> mean_right;
   mean_right.assign(num, 0.0f);
@@ -152,8 +161,9 @@ SadRefined refine_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int xr0
   return out;
 }
 
-SadScan scan_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y, int x_first, int x_last,
-                 int half_width, int half_height, const std::uint8_t* support) {
+TWISTSLAM_SAD_CLONES SadScan scan_sad(const cv::Mat& L, const cv::Mat& R, int xl, int y,
+                                      int x_first, int x_last, int half_width, int half_height,
+                                      const std::uint8_t* support) {
   SadScan out;
   out.second_cost = std::numeric_limits<float>::infinity();
   const int cols = 2 * half_width + 1, rows = 2 * half_height + 1, n = cols * rows;
