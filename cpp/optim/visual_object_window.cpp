@@ -13,6 +13,8 @@ namespace {
 // with the points eliminated, a 100-pose track took about as long either way (crowded s2:
 // 170-340 ms dense, 180-240 ms sparse, measured); a longer track's band stays sparse
 constexpr int kDenseSchurMaxFrames = 50;
+// e_rest holds the translation only: a rotation sigma this large (rad/frame) leaves turning free
+constexpr double kRestSigmaRotationRad = 1e3;
 
 // e_const's rotation sigma at window row i (the triple i-1, i, i+1): see the options
 double const_rotation_sigma(const VisualObjectWindow& w, int i, const VisualObjectWindowOptions& o) {
@@ -113,6 +115,9 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
         b.add_axis_free_heading(object_block[t.a], object_block[i], object_block[t.c], w.up_w,
                                 t.before, t.after, o.lateral_sigma, o.huber_heading);
     }
+    if (o.rest_sigma_translation > 0 && !both_fixed)  // e_rest: a zero twist, translation only
+      b.add_detection_twist(object_block[i], object_block[i + 1], Pi, Vec6::Zero(),
+                            o.rest_sigma_translation, kRestSigmaRotationRad, 0.0);
     if (o.use_const && i >= 1 && i + 1 >= w.num_fixed_frames)
       b.add_constant_velocity(object_block[i - 1], object_block[i], object_block[i + 1], Pi,
                               o.const_sigma_translation, const_rotation_sigma(w, i, o),

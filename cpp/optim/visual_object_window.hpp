@@ -75,6 +75,11 @@ struct VisualObjectWindowOptions {
   // 0.45/0.12/0.34 (0.0005: crowded 0.28/0.29/0.33, urban 0.46/0.13/0.34 and a ghost)
   double link_sigma_rotation = 0.001;
   double huber_const = 3.0;              // sigmas
+  // > 0: e_rest, a prior of no motion on each step between consecutive poses (m/frame, the
+  // translation only; no robust loss): most objects in a street are parked, and a track whose
+  // few far points leave its motion unobserved keeps still instead of running with the noise
+  // of its re-seeds. 0: off
+  double rest_sigma_translation = 0;
   double lateral_sigma = 0.02;           // m/frame, e_head
   double huber_heading = 3.0;            // sigmas
   // e_det (eq. 9): sigmas of the twist between two detections, per frame. Box centres of a

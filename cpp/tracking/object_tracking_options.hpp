@@ -97,6 +97,7 @@ struct ObjectTrackingOptions {
   double const_sigma_rotation = 0.005;    // rad/frame, change of the rotational twist
   double const_rotation_reference_step_m = 1.0;  // m/frame; slower: rotation sigma shrinks (0: off)
   double const_rotation_min_fraction = 0.1;      // of const_sigma_rotation, at rest
+  double rest_sigma_translation = 0;  // m/frame; e_rest of camera-only tracks (0: off)
   int window_iterations = 5;        // Ceres iterations of the window
   double window_function_tolerance = 1e-3;  // the window stops at a smaller relative cost change (config.py)
   double recenter_distance_m = 0.5; // origin moved to the points' median beyond this (0: never)
@@ -222,6 +223,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("const_sigma_rotation", o.const_sigma_rotation, 1e-6, 10.0);
   visit("const_rotation_reference_step_m", o.const_rotation_reference_step_m, 0.0, 100.0);
   visit("const_rotation_min_fraction", o.const_rotation_min_fraction, 1e-3, 1.0);
+  visit("rest_sigma_translation", o.rest_sigma_translation, 0.0, 100.0);
   visit("window_iterations", o.window_iterations, 1, 1000);
   visit("window_function_tolerance", o.window_function_tolerance, 0.0, 1.0);  // of the cost
   visit("recenter_distance_m", o.recenter_distance_m, 0.0, 1000.0);

@@ -94,6 +94,8 @@ optim::VisualObjectWindowOptions ObjectTracker::window_options(const objects::Ob
   wo.const_sigma_rotation = options_.const_sigma_rotation;
   wo.const_rotation_reference_step_m = options_.const_rotation_reference_step_m;
   wo.const_rotation_min_fraction = options_.const_rotation_min_fraction;
+  // a box frames a canonical track; a camera-only track's motion may be unobserved
+  wo.rest_sigma_translation = track.canonical ? 0.0 : options_.rest_sigma_translation;
   wo.max_iterations = options_.window_iterations;
   wo.function_tolerance = options_.window_function_tolerance;
   return wo;
