@@ -16,6 +16,7 @@ void bind_lidar(py::module_& m);
 void bind_perception(py::module_& m);
 void bind_detection(py::module_& m);
 void bind_registration(py::module_& m);
+void bind_io(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -42,4 +43,6 @@ PYBIND11_MODULE(_core, m) {
   twistslam::bindings::bind_detection(detection);
   py::module_ registration = m.def_submodule("registration", "generalized ICP of object scans");
   twistslam::bindings::bind_registration(registration);
+  py::module_ io = m.def_submodule("io", "image files decoded in C++");
+  twistslam::bindings::bind_io(io);
 }

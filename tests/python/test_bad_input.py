@@ -197,13 +197,13 @@ def test_16_bit_images_are_scaled_not_clipped_white(tmp_path):
     assert np.abs(read_image(tmp_path / "rgb.png").astype(int) - rgb // 257).max() <= 1
 
 
-def bomb_png(path: Path, width: int, height: int, depth: int = 8) -> Path:
+def bomb_png(path: Path, width: int, height: int, depth: int = 8, colour_type: int = 0) -> Path:
     """A few kB of zeros whose header claims ``width x height`` pixels."""
     def chunk(kind: bytes, data: bytes) -> bytes:
         crc = zlib.crc32(kind + data) & 0xFFFFFFFF
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", crc)
 
-    header = struct.pack(">IIBBBBB", width, height, depth, 0, 0, 0, 0)
+    header = struct.pack(">IIBBBBB", width, height, depth, colour_type, 0, 0, 0)
     rows = zlib.compress(b"\0" * (width * depth // 8 + 1) * 200, 9)
     path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", rows)
                      + chunk(b"IEND", b""))
@@ -211,12 +211,41 @@ def bomb_png(path: Path, width: int, height: int, depth: int = 8) -> Path:
 
 
 @pytest.mark.parametrize("size", [(9000, 9000), (60000, 60000)])
-def test_decompression_bomb_is_refused_before_decoding(tmp_path, size):
-    path = bomb_png(tmp_path / "bomb.png", *size)
+@pytest.mark.parametrize("colour_type", [0, 2])  # grey, RGB (the core's kind below the limit)
+def test_decompression_bomb_is_refused_before_decoding(tmp_path, size, colour_type):
+    path = bomb_png(tmp_path / "bomb.png", *size, colour_type=colour_type)
     with pytest.raises(ValueError, match=rf"^{path}: "):
         read_image(path)
     with pytest.raises(ValueError, match=rf"^{path}: .*pixels"):
         read_png16(bomb_png(path, *size, depth=16))
+
+
+def test_colour_pngs_are_decoded_by_the_core_with_pillows_pixels(tmp_path, monkeypatch):
+    """8-bit RGB PNGs (KITTI's, the simulator's) go to the C++ decoder; the pixels are
+    Pillow's. Other kinds (RGBA here, grey and 16-bit above) stay with Pillow."""
+    from twistslam._core import io as core_io
+
+    rgb = np.random.default_rng(0).integers(0, 256, (37, 53, 3), dtype=np.uint8)
+    Image.fromarray(rgb).save(tmp_path / "rgb.png")
+    Image.fromarray(np.dstack([rgb, rgb[..., :1]])).save(tmp_path / "rgba.png")
+    calls = []
+    decode = core_io.read_png_rgb8
+    monkeypatch.setattr(core_io, "read_png_rgb8", lambda p: calls.append(p) or decode(p))
+    image = read_image(tmp_path / "rgb.png")
+    assert calls == [str(tmp_path / "rgb.png")]
+    assert image.dtype == np.uint8 and image.shape == (37, 53, 3) and np.array_equal(image, rgb)
+    assert np.array_equal(read_image(tmp_path / "rgba.png"), rgb) and len(calls) == 1
+
+
+def test_a_truncated_colour_png_is_an_error_naming_the_file(tmp_path):
+    rgb = np.random.default_rng(1).integers(0, 256, (40, 60, 3), dtype=np.uint8)
+    Image.fromarray(rgb).save(tmp_path / "whole.png")
+    cut = tmp_path / "cut.png"
+    cut.write_bytes((tmp_path / "whole.png").read_bytes()[:200])  # the header and a little data
+    with pytest.raises(ValueError, match=rf"^{cut}: "):
+        read_image(cut)
+    with pytest.raises(FileNotFoundError, match="missing.png"):
+        read_image(tmp_path / "missing.png")
 
 
 # -------------------------------------------------------- sequences that are silently wrong
