@@ -147,46 +147,26 @@ int row_keys_sse2(const float* xs, const float* ys, const float* zs, const int* 
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // Sixteen at a time with AVX-512 (chosen at run time, cpu_has_avx512): the keys of the
 // candidates inside are packed into consecutive slots by a register compress (a compress
-// straight to memory is slow on some CPUs), 8 keys per store.
+// straight to memory is slow on some CPUs), 8 keys per store. A row's last step is masked
+// (a row of a small scan's grid holds ~5-10 candidates: mostly that step alone): its
+// masked-off lanes load nothing (and cannot fault) and count as outside.
 __attribute__((target("avx512f"))) int row_keys_avx512(const float* xs, const float* ys,
                                                         const float* zs, const int* sorted,
                                                         int j, int end, const RowQuery& q,
                                                         std::uint64_t* keys, int kept) {
   const __m512 limit16 = _mm512_set1_ps(q.limit), qx16 = _mm512_set1_ps(q.qx),
                qy16 = _mm512_set1_ps(q.qy), qz16 = _mm512_set1_ps(q.qz);
-  for (; j + 16 <= end; j += 16) {
-    const __m512 dx = _mm512_sub_ps(_mm512_loadu_ps(xs + j), qx16);
-    const __m512 dy = _mm512_sub_ps(_mm512_loadu_ps(ys + j), qy16);
-    const __m512 dz = _mm512_sub_ps(_mm512_loadu_ps(zs + j), qz16);
+  for (; j < end; j += 16) {
+    const __mmask16 lanes = end - j >= 16 ? static_cast<__mmask16>(0xFFFF)
+                                          : static_cast<__mmask16>((1u << (end - j)) - 1u);
+    const __m512 dx = _mm512_sub_ps(_mm512_maskz_loadu_ps(lanes, xs + j), qx16);
+    const __m512 dy = _mm512_sub_ps(_mm512_maskz_loadu_ps(lanes, ys + j), qy16);
+    const __m512 dz = _mm512_sub_ps(_mm512_maskz_loadu_ps(lanes, zs + j), qz16);
     const __m512 d2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)),
                                     _mm512_mul_ps(dz, dz));
-    const __mmask16 inside = _mm512_cmp_ps_mask(d2, limit16, _CMP_LE_OQ);
+    const __mmask16 inside = _mm512_mask_cmp_ps_mask(lanes, d2, limit16, _CMP_LE_OQ);
     const __m512i bits = _mm512_castps_si512(d2);
-    const __m512i index = _mm512_loadu_si512(sorted + j);
-    const __m512i key_lo = _mm512_or_si512(
-        _mm512_slli_epi64(_mm512_cvtepu32_epi64(_mm512_castsi512_si256(bits)), 32),
-        _mm512_cvtepu32_epi64(_mm512_castsi512_si256(index)));
-    const __m512i key_hi = _mm512_or_si512(
-        _mm512_slli_epi64(_mm512_cvtepu32_epi64(_mm512_extracti64x4_epi64(bits, 1)), 32),
-        _mm512_cvtepu32_epi64(_mm512_extracti64x4_epi64(index, 1)));
-    const __mmask8 in_lo = static_cast<__mmask8>(inside), in_hi = static_cast<__mmask8>(inside >> 8);
-    _mm512_storeu_si512(keys + kept, _mm512_maskz_compress_epi64(in_lo, key_lo));
-    kept += __builtin_popcount(in_lo);
-    _mm512_storeu_si512(keys + kept, _mm512_maskz_compress_epi64(in_hi, key_hi));
-    kept += __builtin_popcount(in_hi);
-  }
-  // The rest (a row of a small scan's grid holds ~5-10 candidates: mostly only this) in one
-  // masked step: masked-off lanes load nothing (and cannot fault) and count as outside.
-  if (j < end) {
-    const __mmask16 tail = static_cast<__mmask16>((1u << (end - j)) - 1u);
-    const __m512 dx = _mm512_sub_ps(_mm512_maskz_loadu_ps(tail, xs + j), qx16);
-    const __m512 dy = _mm512_sub_ps(_mm512_maskz_loadu_ps(tail, ys + j), qy16);
-    const __m512 dz = _mm512_sub_ps(_mm512_maskz_loadu_ps(tail, zs + j), qz16);
-    const __m512 d2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)),
-                                    _mm512_mul_ps(dz, dz));
-    const __mmask16 inside = _mm512_mask_cmp_ps_mask(tail, d2, limit16, _CMP_LE_OQ);
-    const __m512i bits = _mm512_castps_si512(d2);
-    const __m512i index = _mm512_maskz_loadu_epi32(tail, sorted + j);
+    const __m512i index = _mm512_maskz_loadu_epi32(lanes, sorted + j);
     const __m512i key_lo = _mm512_or_si512(
         _mm512_slli_epi64(_mm512_cvtepu32_epi64(_mm512_castsi512_si256(bits)), 32),
         _mm512_cvtepu32_epi64(_mm512_castsi512_si256(index)));
