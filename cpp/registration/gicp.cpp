@@ -7,6 +7,7 @@
 
 #include "geometry/se3.hpp"
 #include "geometry/so3.hpp"
+#include "registration/gicp_terms.hpp"
 #include "registration/point_covariances.hpp"
 
 namespace twistslam::registration {
@@ -151,18 +152,15 @@ Linearization linearize(const GicpScan& source, const GicpScan& target, const Ma
   const Mat3 R = T.topLeftCorner<3, 3>();
   const Vec3 t = T.topRightCorner<3, 1>();
   const double max_d2 = o.max_correspondence_distance_m * o.max_correspondence_distance_m;
-  const bool huber = o.kernel == RobustKernel::kHuber;
   // J = [-I, hat(q)] for e(delta) = e - delta_v + q x delta_w (T <- exp(delta) T) and
   // W = (C_t + R C_s R^T)^-1 = 0.5 I + a_u u u^T + a_v v v^T (plane_pair_information), so
   // J^T W J = 0.5 J^T J + a_u g_u g_u^T + a_v g_v g_v^T with g = J^T u = [-u; u x q]: the
   // 0.5 J^T J part is [I, -hat(q); hat(q), |q|^2 I - q q^T], summed from the moments of q at
   // the end, the rest two 6-vector outer products per correspondence (no 3x3 inverse, fewer
-  // multiplications than the 3x3 blocks of W, W hat(q) and hat(q) W hat(q)).
-  Mat6 H_rank = Mat6::Zero();
-  Vec6 b_rank = Vec6::Zero();
-  double sum_w = 0.0;
-  Vec3 sum_q = Vec3::Zero(), sum_e = Vec3::Zero(), sum_e_cross_q = Vec3::Zero();
-  Mat3 sum_qq = Mat3::Zero();
+  // multiplications than the 3x3 blocks of W, W hat(q) and hat(q) W hat(q)). The search below
+  // collects each correspondence's vectors; sum_normal_equations sums them eight at a time.
+  thread_local GicpTerms terms;
+  terms.clear();
   // Source points in their tree's leaf order: consecutive points are close, so a point without
   // a previous neighbour (first iteration) borrows the last one found as its hint.
   int last_found = -1;
@@ -188,50 +186,15 @@ Linearization linearize(const GicpScan& source, const GicpScan& target, const Ma
     c.neighbor = nn.index;
     if (nn.index < 0) continue;
     last_found = nn.index;
-    const Vec3 e = target.points[nn.index] - q;
-    const Vec3& n = target.normals[nn.index];
-    const Vec3 m = R * source.normals[i];
-    const PlanePairInformation info = plane_pair_information(n.dot(m));
-    const Vec3 u = n + m, v = n - m;
-    const double ue = u.dot(e), ve = v.dot(e);
-    const double m2 = 0.5 * e.squaredNorm() + info.alpha_sum * ue * ue +
-                      info.alpha_diff * ve * ve;  // e^T W e
-    double weight = 1.0;
-    double rho = m2;
-    if (huber) {
-      const double r = std::sqrt(m2);
-      if (r > o.huber_threshold) {
-        weight = o.huber_threshold / r;
-        rho = o.huber_threshold * (2.0 * r - o.huber_threshold);
-      }
-    }
-    Vec6 g_u, g_v;
-    g_u << -u, u.cross(q);
-    g_v << -v, v.cross(q);
-    const double a_u = weight * info.alpha_sum, a_v = weight * info.alpha_diff;
-    const Vec6 s_u = a_u * g_u, s_v = a_v * g_v;
-    for (int c = 0; c < 6; ++c)  // upper triangle; mirrored below
-      for (int r = 0; r <= c; ++r) H_rank(r, c) += s_u[r] * g_u[c] + s_v[r] * g_v[c];
-    // J^T W e = 0.5 [-e; e x q] + a_u (u . e) g_u + a_v (v . e) g_v
-    b_rank.noalias() += (a_u * ue) * g_u + (a_v * ve) * g_v;
-    sum_w += weight;
-    sum_q.noalias() += weight * q;
-    sum_qq.noalias() += (weight * q) * q.transpose();
-    sum_e.noalias() += weight * e;
-    sum_e_cross_q.noalias() += weight * e.cross(q);
-    lin.cost += rho;
-    lin.sum_squared_error_m2 += e.squaredNorm();
-    ++lin.num_inliers;
+    terms.add(q, target.points[nn.index] - q, target.normals[nn.index], R * source.normals[i]);
   }
-  const Mat3 hat_sum_q = geometry::hat(sum_q);
-  lin.H = H_rank.selfadjointView<Eigen::Upper>();
-  lin.H.topLeftCorner<3, 3>().diagonal().array() += 0.5 * sum_w;
-  lin.H.topRightCorner<3, 3>() -= 0.5 * hat_sum_q;
-  lin.H.bottomLeftCorner<3, 3>() += 0.5 * hat_sum_q;
-  lin.H.bottomRightCorner<3, 3>() += 0.5 * (sum_qq.trace() * Mat3::Identity() - sum_qq);
-  lin.b = b_rank;
-  lin.b.head<3>() -= 0.5 * sum_e;
-  lin.b.tail<3>() += 0.5 * sum_e_cross_q;
+  lin.num_inliers = terms.size();
+  const GicpNormalEquations sums =
+      sum_normal_equations(terms, o.kernel == RobustKernel::kHuber, o.huber_threshold);
+  lin.H = sums.H;
+  lin.b = sums.b;
+  lin.cost = sums.cost;
+  lin.sum_squared_error_m2 = sums.sum_squared_error_m2;
   return lin;
 }
 
