@@ -160,7 +160,7 @@ Linearization linearize(const GicpScan& source, const GicpScan& target, const Ma
   // multiplications than the 3x3 blocks of W, W hat(q) and hat(q) W hat(q)). The search below
   // collects each correspondence's vectors; sum_normal_equations sums them eight at a time.
   thread_local GicpTerms terms;
-  terms.clear();
+  terms.reset(static_cast<int>(source.points.size()));
   // Source points in their tree's leaf order: consecutive points are close, so a point without
   // a previous neighbour (first iteration) borrows the last one found as its hint.
   int last_found = -1;

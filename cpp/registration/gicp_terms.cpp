@@ -15,14 +15,12 @@
 
 namespace twistslam::registration {
 
-void GicpTerms::add(const Vec3& q, const Vec3& e, const Vec3& n, const Vec3& m) {
-  const double values[12] = {q[0], q[1], q[2], e[0], e[1], e[2],
-                             n[0], n[1], n[2], m[0], m[1], m[2]};
-  for (int k = 0; k < 12; ++k) {
-    if (static_cast<int>(columns_[k].size()) <= size_) columns_[k].resize(2 * size_ + kGicpLanes);
-    columns_[k][size_] = values[k];
-  }
-  ++size_;
+void GicpTerms::reset(int capacity) {
+  size_ = 0;
+  // whole blocks beyond the last pair, so that pad_to_blocks never reallocates
+  const std::size_t room = static_cast<std::size_t>(capacity) + kGicpLanes;
+  for (auto& column : columns_)
+    if (column.size() < room) column.resize(room);
 }
 
 int GicpTerms::pad_to_blocks() {

@@ -18,8 +18,18 @@ namespace twistslam::registration {
 // normal m.
 class GicpTerms {
  public:
-  void clear() { size_ = 0; }
-  void add(const Vec3& q, const Vec3& e, const Vec3& n, const Vec3& m);
+  // Empties the terms and makes room for `capacity` pairs: add() writes without a check (it
+  // runs once per correspondence, every iteration), so at most that many may be added.
+  void reset(int capacity);
+  void add(const Vec3& q, const Vec3& e, const Vec3& n, const Vec3& m) {
+    double* const at[12] = {&columns_[0][size_], &columns_[1][size_], &columns_[2][size_],
+                            &columns_[3][size_], &columns_[4][size_], &columns_[5][size_],
+                            &columns_[6][size_], &columns_[7][size_], &columns_[8][size_],
+                            &columns_[9][size_], &columns_[10][size_], &columns_[11][size_]};
+    *at[0] = q[0], *at[1] = q[1], *at[2] = q[2], *at[3] = e[0], *at[4] = e[1], *at[5] = e[2];
+    *at[6] = n[0], *at[7] = n[1], *at[8] = n[2], *at[9] = m[0], *at[10] = m[1], *at[11] = m[2];
+    ++size_;
+  }
   int size() const { return size_; }
 
   // Pads the arrays to whole blocks (zero pairs, which sum_normal_equations gives no weight)

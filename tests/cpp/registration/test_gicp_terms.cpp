@@ -30,6 +30,7 @@ TEST(GicpTerms, BlockSumsEqualTheDensePerPairSums) {
       std::normal_distribution<double> offset(0.0, 0.05), spread(0.0, 3.0);
       const double threshold = 0.05;
       GicpTerms terms;
+      terms.reset(count);
       Mat6 H = Mat6::Zero();
       Vec6 b = Vec6::Zero();
       double cost = 0.0, sse = 0.0;
