@@ -6,7 +6,6 @@
 #include <stdexcept>
 
 #include "geometry/se3.hpp"
-#include "geometry/so3.hpp"
 #include "registration/gicp_terms.hpp"
 #include "registration/point_covariances.hpp"
 
