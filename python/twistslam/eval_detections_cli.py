@@ -134,10 +134,19 @@ def run_eval_detections(args: argparse.Namespace) -> int:
         iou=args.iou if args.iou else None, frames=frames, sampling=args.sampling,
     )
     print(result.table(), end="")
+    out = result.to_dict()
+    if args.box_ends:
+        from .eval.box_ends import evaluate_box_ends
+
+        ends = [evaluate_box_ends(gt, dets, cls, frames=frames) for cls in args.classes]
+        for e in ends:
+            if e.n_matched:
+                print(e.table(), end="")
+        out["box_ends"] = [e.to_dict() for e in ends]
     if args.json:
         path = Path(args.json)
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8")
+        path.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
         print(f"wrote {path}")
     return 0
 
@@ -176,5 +185,9 @@ def add_eval_detections(sub: argparse._SubParsersAction) -> argparse.ArgumentPar
                    help="recall sampling: exact (the AP_R40 definition, right on few boxes) "
                         "or devkit (the KITTI devkit's / OpenPCDet's shortcut)")
     p.add_argument("--json", metavar="FILE", help="write every curve and AP as JSON")
+    p.add_argument("--box-ends", action="store_true",
+                   help="also where the boxes end: median offsets of each matched box's near "
+                        "and far end along its label's length, by view angle and range "
+                        "(twistslam.eval.box_ends)")
     p.set_defaults(handler=run_eval_detections)
     return p

@@ -11,6 +11,7 @@ paper-style tables and plots.
 """
 
 from .amota import ScoreSweep, recall_thresholds, score_sweep
+from .box_ends import BoxEndsResult, box_end_offsets, evaluate_box_ends
 from .camera import CameraMetrics, evaluate_camera
 from .clear_mot import MotMetrics, clear_mot, pool_mot
 from .devkit import devkit_mot
@@ -31,12 +32,12 @@ from .trajectory import align, ate_errors, relative_errors, umeyama_alignment
 
 __all__ = [
     "DIFFICULTIES", "MODES", "PROTOCOLS",
-    "CameraMetrics", "Difficulty", "EvalSettings", "HotaFrames", "HotaResult", "Matching",
+    "BoxEndsResult", "CameraMetrics", "Difficulty", "EvalSettings", "HotaFrames", "HotaResult", "Matching",
     "MotEvaluation", "MotMetrics", "ObjectTrackMetrics", "Protocol", "ResultsNotFoundError",
     "ScoreSweep", "SequenceMetrics", "SequenceOverlaps", "SequenceResults",
     "TrackDetection", "TrackPoseErrors",
-    "align", "assign", "ate_errors", "box_poses", "build_tables", "clear_mot", "devkit_mot",
-    "evaluate_camera", "evaluate_mot", "evaluate_sequence", "get_difficulty", "get_protocol",
+    "align", "assign", "ate_errors", "box_end_offsets", "box_poses", "build_tables", "clear_mot", "devkit_mot",
+    "evaluate_box_ends", "evaluate_camera", "evaluate_mot", "evaluate_sequence", "get_difficulty", "get_protocol",
     "hota", "hota_frames", "iou_function", "load_paper_tables", "load_results",
     "match_sequence", "pair_tracks", "plot_trajectories", "pool_hota", "pool_mot",
     "recall_thresholds", "relative_errors", "render_markdown", "render_text", "score_sweep",
