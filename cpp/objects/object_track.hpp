@@ -61,6 +61,10 @@ struct TrackFrame {
   // not reported because its track's points lie nearer than the LiDAR sees them
   // (tracking/object_lidar_check.cpp); the verdict is taken again on the whole track at the end
   bool lidar_contradicted = false;
+  // a far camera-only vehicle row: the LiDAR returns on its instance mask then (u, v px,
+  // depth m), to scale the final rows' depth to them (tracking/object_lidar_align.cpp);
+  // empty otherwise
+  Points3 far_lidar_returns;
   // LiDAR registration (eq. 6-7): the object's motion in w from the previous frame to this
   // one, T_w_o(this) = M_w_registered T_w_o(previous), measured by GICP of the object scans
   bool registered = false;

@@ -103,6 +103,15 @@ struct ObjectLidarOptions {
   int lidar_check_min_rows = 5;
   int lidar_check_min_returns = 5;
   int lidar_check_min_points = 3;
+  // the final rows of a camera-only vehicle track farther than far_lidar_align_min_depth_m
+  // move along their lines of sight by the median, over its rows, of the LiDAR returns' depth
+  // over its points' (0: off); a row's median counts within far_lidar_align_max_ratio of 1,
+  // far_lidar_align_min_rows of them decide, and the scale grows in over far_lidar_align_ramp_m
+  // (object_lidar_align.cpp)
+  double far_lidar_align_min_depth_m = 30.0;
+  double far_lidar_align_ramp_m = 15.0;
+  double far_lidar_align_max_ratio = 0.15;
+  int far_lidar_align_min_rows = 3;
   // point-extent boxes (Detection::point_extent) laid from their near end, the car's length
   // from this quantile of theirs (off: every box as an estimate, the median length)
   bool point_extent_lengths = false;
@@ -208,6 +217,10 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("lidar_check_min_rows", o.lidar_check_min_rows, 1, 1000000);
   visit("lidar_check_min_returns", o.lidar_check_min_returns, 1, 1000000);
   visit("lidar_check_min_points", o.lidar_check_min_points, 1, 1000000);
+  visit("far_lidar_align_min_depth_m", o.far_lidar_align_min_depth_m, 0.0, 1000.0);
+  visit("far_lidar_align_ramp_m", o.far_lidar_align_ramp_m, 0.0, 1000.0);
+  visit("far_lidar_align_max_ratio", o.far_lidar_align_max_ratio, 0.0, 1.0);
+  visit("far_lidar_align_min_rows", o.far_lidar_align_min_rows, 1, 1000000);
   visit("point_extent_lengths", o.point_extent_lengths, 0, 1);
   visit("point_extent_length_quantile", o.point_extent_length_quantile, 0.0, 1.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);

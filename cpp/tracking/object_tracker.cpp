@@ -320,6 +320,7 @@ ObjectTrackingReport ObjectTracker::track(const Frame& input_frame, const cv::Ma
   hide_duplicate_tracks(frame);
   hide_see_through_tracks(frame);
   hide_lidar_contradicted_tracks(frame);
+  keep_far_lidar_returns(frame);
   remember_unused_boxes(frame);
   for (int c = 0; c < static_cast<int>(tracks_.size()); ++c)
     if (tracks_[c].alive()) tracks_[c].class_id = clusters_[c].class_votes.best(tracks_[c].class_id);

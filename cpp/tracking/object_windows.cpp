@@ -254,6 +254,7 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
   if (!options_.final_smoothing) {
     retest_see_through(T_c_w_of_frame);
     retest_lidar_contradiction();
+    align_far_rows_to_lidar(T_c_w_of_frame);
     return report;
   }
   for (int c = 0; c < static_cast<int>(tracks_.size()); ++c) {
@@ -322,6 +323,7 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
   }
   retest_see_through(T_c_w_of_frame);
   retest_lidar_contradiction();
+  align_far_rows_to_lidar(T_c_w_of_frame);
   return report;
 }
 

@@ -296,6 +296,26 @@ class LidarObjectsConfig:
     lidar_check_min_points: int = param(
         3, "fewer of the track's points on its mask with returns around them (3 within 8 px): "
         "the row is not checked", "points", lo=1, hi=1000000)
+    far_lidar_align_min_depth_m: float = param(
+        30.0, "the final rows of a camera-only vehicle track farther than this move along their "
+        "lines of sight by the median, over the track's rows, of the LiDAR returns' depth over "
+        "its points' (each row: the returns on its instance mask within 8 px of each point, as "
+        "lidar_check_*). Beyond ~30 m a stereo depth is good to 1-3 m and a far car's matches "
+        "lean one way for many frames; its 20-50 returns measure it to centimetres. 0: off. "
+        "Measured (2026-12-06) on 32 simulated sequences, files / DIS flow: see "
+        "docs/visual_objects.md, 'Far rows at the LiDAR's depth'", "m", lo=0.0, hi=1000.0)
+    far_lidar_align_ramp_m: float = param(
+        15.0, "... the scale grows in from far_lidar_align_min_depth_m over this many metres "
+        "of depth, so that no row jumps where it starts (applied at full strength from 30 m, "
+        "a prototype on urban s19 raised that sequence's RPE_t 0.021 -> 0.030 m/m; ramped over "
+        "15 m, 0.021 -> 0.023)", "m", lo=0.0, hi=1000.0)
+    far_lidar_align_max_ratio: float = param(
+        0.15, "... a row's median ratio counts only within this of 1: far stereo errors are a "
+        "few per cent (urban s5's ghost 6 %), a larger one is an occluder's or the "
+        "background's returns", "fraction", lo=0.0, hi=1.0)
+    far_lidar_align_min_rows: int = param(
+        3, "... rows with a ratio before the track's median moves it", "rows", lo=1,
+        hi=1000000)
     point_extent_lengths: bool = param(
         False, "boxes that are the tight extent of their points (Detections3D.point_extent, "
         "the classical detector) are laid from their end nearer the sensor, the car's length "

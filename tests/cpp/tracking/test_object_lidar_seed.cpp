@@ -294,3 +294,49 @@ TEST_F(LidarSeed, ATrackWithBoxesIsNotJudgedByItsPointsDepth) {
 }
 
 }  // namespace
+
+// A far camera-only car whose stereo depths are 5 % long or 3 % short (inside the LiDAR
+// check's bounds: still reported). At the end (smooth_tracks) its rows move along their lines
+// of sight to the returns' depth (object_lidar_align.cpp): at 40 m the scale is ramped in to
+// 2 / 3 or more of the ratio (far_lidar_align_ramp_m 15 beyond 30 m): beyond 40 m over 40 % of
+// the error goes (the synthetic scan covers every face, so a point meets returns of both). With
+// the alignment off, for a car at 20 m (nearer than far_lidar_align_min_depth_m), and for the
+// rows nearer than that bound of a car coming from 42 m to 28 m, the rows stay where the stereo
+// put them.
+TEST_F(LidarSeed, FarRowsMoveToTheirReturnsDepthAtTheEnd) {
+  struct Case {
+    double z0, vz;  // m, m/frame along the camera's z
+  };
+  for (const Case c : {Case{40.0, 0.1}, Case{20.0, 0.1}, Case{42.0, -1.6}})
+    for (const double scale : {1.05, 0.97}) {
+      std::vector<double> depth[2];  // per row, without / with the alignment
+      car = make_car(rng, Vec3(-2, 0.5, c.z0), Vec3(0.3, 0, c.vz), 0.0);  // one car both ways
+      for (const bool align : {false, true}) {
+        tracking::ObjectLidarOptions lidar;
+        if (!align) lidar.far_lidar_align_min_depth_m = 0;
+        auto tracker = make_tracker({}, lidar);
+        std::map<int, Mat4> T_c_w_of_frame;
+        run(tracker, 10, [scale](SceneFrame& f) { f.stereo_depth_scale = scale; });
+        for (int i = 0; i < 10; ++i) T_c_w_of_frame[i] = Mat4::Identity();
+        ASSERT_EQ(tracker.tracks().size(), 1u) << c.z0 << " " << scale;
+        tracker.smooth_tracks(T_c_w_of_frame);
+        const objects::ObjectTrack& track = tracker.tracks()[0];
+        ASSERT_EQ(track.frames.size(), 10u);
+        for (const objects::TrackFrame& row : track.frames) {
+          EXPECT_TRUE(row.reported) << c.z0 << " " << scale << " " << align;
+          depth[align].push_back(row.T_w_o(2, 3));
+        }
+      }
+      for (int i = 0; i < 10; ++i) {
+        const double truth = car.pose(i)(2, 3), stereo_error = depth[0][i] - truth;
+        EXPECT_GT(std::abs(stereo_error), 0.6 * std::abs(scale - 1.0) * truth) << "the bias is there";
+        if (depth[0][i] < 30.0) {
+          EXPECT_DOUBLE_EQ(depth[1][i], depth[0][i]) << c.z0 << " row " << i << ": nearer than the bound";
+        } else if (depth[0][i] > 40.0) {
+          EXPECT_LT(std::abs(depth[1][i] - truth), 0.6 * std::abs(stereo_error))
+              << c.z0 << " " << scale << " row " << i << ": stereo " << depth[0][i] << ", aligned "
+              << depth[1][i] << ", truth " << truth;
+        }
+      }
+    }
+}
