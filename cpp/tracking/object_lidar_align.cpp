@@ -19,27 +19,26 @@
 
 namespace twistslam::tracking {
 using detail::median_value;
+using detail::kDepthCheckMinReturns;
+using detail::kDepthCheckRadiusPx;
 using detail::transform;
 
 namespace {
-// returns around a point, as ObjectTracker::instance_lidar_depth_near (object_lidar_seed.cpp)
-constexpr double kNearRadiusPx = 8.0;
-constexpr int kNearMinReturns = 3;
-
 bool camera_only_vehicle(const objects::ObjectTrack& track) {
   if (track.canonical || track.link != geometry::LinkType::kPlanar) return false;
   return std::none_of(track.frames.begin(), track.frames.end(),
                       [](const objects::TrackFrame& r) { return r.has_detection(); });
 }
 
-// The median of the returns' depth within kNearRadiusPx of uv (NaN: fewer than kNearMinReturns).
+// The median of the kept returns' depth around uv, by the LiDAR check's rule
+// (detail::kDepthCheckRadiusPx, kDepthCheckMinReturns; NaN: too few).
 double returns_depth_near(const Points3& returns, const Vec2& uv) {
   std::vector<double> depths;
   for (Eigen::Index i = 0; i < returns.rows(); ++i) {
     const double du = returns(i, 0) - uv.x(), dv = returns(i, 1) - uv.y();
-    if (du * du + dv * dv <= kNearRadiusPx * kNearRadiusPx) depths.push_back(returns(i, 2));
+    if (du * du + dv * dv <= kDepthCheckRadiusPx * kDepthCheckRadiusPx) depths.push_back(returns(i, 2));
   }
-  if (static_cast<int>(depths.size()) < kNearMinReturns) return std::nan("");
+  if (static_cast<int>(depths.size()) < kDepthCheckMinReturns) return std::nan("");
   return median_value(depths);
 }
 }  // namespace

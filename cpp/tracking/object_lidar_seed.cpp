@@ -14,16 +14,13 @@
 
 namespace twistslam::tracking {
 using detail::median_value;
+using detail::kDepthCheckMinReturns;
+using detail::kDepthCheckRadiusPx;
 using detail::transform;
 
 namespace {
 // the keypoint depth thresholds of the camera's LiDAR depth (measured on KITTI 0001)
 const lidar::LidarDepthOptions kDepthOptions{};
-// px and returns of the depth check (instance_lidar_depth_near): at a mask's edge the returns
-// lie on one side of a keypoint, which a local plane refuses (no support) and a median takes;
-// 8 px brackets a keypoint by two HDL-64 lines (4.2-6.3 px apart in KITTI's image)
-constexpr double kDepthCheckRadiusPx = 8.0;
-constexpr int kDepthCheckMinReturns = 3;
 }  // namespace
 
 const lidar::ScanProjection* ObjectTracker::instance_returns(int instance) const {

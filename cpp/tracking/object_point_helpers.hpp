@@ -20,6 +20,14 @@ inline void observe(objects::ObjectPoint& p, const objects::ObjectPointObservati
   if (archive) p.archive.push_back(o);
 }
 
+// The LiDAR depth around a keypoint or point: the median of the returns on its instance's mask
+// within this radius, when there are at least this many. At a mask's edge the returns lie on one
+// side of a point, which a local plane refuses (no support) and a median takes; 8 px brackets a
+// point by two HDL-64 lines (4.2-6.3 px apart in KITTI's image). Shared by the LiDAR check
+// (instance_lidar_depth_near) and the far rows' alignment (object_lidar_align.cpp).
+inline constexpr double kDepthCheckRadiusPx = 8.0;
+inline constexpr int kDepthCheckMinReturns = 3;
+
 inline Vec3 transform(const Mat4& T, const Vec3& X) {
   return T.topLeftCorner<3, 3>() * X + T.topRightCorner<3, 1>();
 }
