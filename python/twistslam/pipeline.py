@@ -238,7 +238,8 @@ def run(seq_or_path: SequenceLike, config: Config | str | Path | dict | None = N
         from .viz.run_logger import RunViewer
 
         viewer = RunViewer(sequence, spawn=viz, save=viz_save,
-                           box_rules=CameraBoxRules.from_config(config))
+                           box_rules=CameraBoxRules.from_config(config),
+                           road_class_id=config.visual_objects.road_class_id)
     tracked, stages, frame_ms = [], [], []
     with RateBar(len(indices), f"seq {name}" if name else "run", enabled=progress) as bar:
         last = time.perf_counter()

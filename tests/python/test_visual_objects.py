@@ -119,13 +119,21 @@ def test_run_writes_a_rerun_recording_with_the_objects(sim, tmp_path):
     path = tmp_path / "run.rrd"
     twistslam.run(KittiTracking(sim, "0000"), {"run": {"max_frames": 4}}, progress=False,
                   segmentation="files", flow="files", viz_save=path)
-    entities = {}
+    entities, road = {}, []
     for chunk in RrdReader(path).stream():
         entities.setdefault(chunk.entity_path, 0)
         entities[chunk.entity_path] += len(chunk.to_record_batch())
+        if chunk.entity_path == "/world/lidar/road":
+            for row in chunk.to_record_batch().to_pylist():
+                road += row.get("Points3D:positions") or []
     for entity in ("/world/camera", "/world/camera/image", "/world/camera/image/segmentation",
-                   "/world/objects/boxes", "/world/objects/points", "/world/camera_trajectory"):
+                   "/world/objects/boxes", "/world/objects/points", "/world/camera_trajectory",
+                   "/world/lidar/scan", "/world/lidar/road"):
         assert entities.get(entity, 0) > 0, f"{entity} missing from {sorted(entities)}"
+    # figure 1 (d)'s green returns lie on the simulated flat road, 1.65 m below the cameras
+    # (y down; the first camera is the world frame and the car drives level)
+    heights = np.array(road)[:, 1]
+    assert len(heights) > 1000 and abs(np.median(heights) - 1.65) < 0.1
 
 
 def test_road_plane_is_fitted_from_the_road_keypoints(sim):

@@ -28,6 +28,8 @@ EXPECTED = {
     "/world/camera/image/instances": {"SegmentationImage:buffer", "AnnotationContext:context"},
     "/world/camera/image/boxes": {"Boxes2D:half_sizes", "Boxes2D:labels"},
     "/world/static_points": {"Points3D:positions", "Points3D:colors"},
+    "/world/lidar/scan": {"Points3D:positions", "Points3D:colors"},
+    "/world/lidar/road": {"Points3D:positions", "Points3D:colors"},
     "/world/objects/points": {"Points3D:positions", "Points3D:colors"},
     "/world/objects/boxes": {"Boxes3D:centers", "Boxes3D:half_sizes", "Boxes3D:quaternions",
                              "Boxes3D:labels"},
@@ -67,6 +69,8 @@ def synthetic_frame(index: int) -> dict:
     return dict(image_left=image, T_w_c=pose(yaw(0.02 * index), [0.0, 0.0, 1.0 * index]),
                 class_ids=class_ids, instance_ids=instance_ids, objects=[car, person],
                 static_points_w=rng.normal(0.0, 5.0, (100, 3)),
+                lidar_points_w=rng.normal(0.0, 20.0, (200, 3)),
+                road_lidar_points_w=rng.normal([0.0, 1.65, 10.0], [5.0, 0.02, 8.0], (50, 3)),
                 scalars={"inliers": 120 + index, "stage_ms/tracking": 8.5})
 
 
@@ -126,6 +130,9 @@ def test_recording_holds_the_frames_content(recording):
     np.testing.assert_allclose(half_sizes, [2.0, 0.75, 0.9])  # l, h, w along the box's x, y, z
     assert len(recording.at("/world/objects/points", "Points3D:positions", 1)) == 20
     assert len(recording.at("/world/static_points", "Points3D:positions", 1)) == 100
+    assert len(recording.at("/world/lidar/scan", "Points3D:positions", 1)) == 200
+    road = recording.at("/world/lidar/road", "Points3D:positions", 1)
+    np.testing.assert_allclose(road, synthetic_frame(1)["road_lidar_points_w"], atol=1e-5)
     assert len(recording.at("/world/camera_trajectory", "LineStrips3D:strips", 2)[0]) == 3
     strips = recording.at("/world/objects/trajectories", "LineStrips3D:strips", 2)
     assert sorted(len(strip) for strip in strips) == [3, 3]  # two tracks, three frames each
@@ -176,6 +183,8 @@ def _with(field: str, value) -> dict:
     ("class_ids", np.zeros((HEIGHT, WIDTH), np.float32)),
     ("instance_ids", np.zeros((HEIGHT - 1, WIDTH), np.int32)),
     ("static_points_w", np.zeros((10, 2))),
+    ("lidar_points_w", np.zeros((10, 4))),
+    ("road_lidar_points_w", np.zeros(3)),
     ("objects[0].T_w_o", np.eye(3)),
     ("objects[0].size", np.ones(2)),
     ("objects[0].points_w", np.zeros(3)),

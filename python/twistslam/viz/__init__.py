@@ -4,7 +4,9 @@
 """
 
 from .colors import CITYSCAPES_COLORS, track_color
+from .lidar_view import LidarView, lidar_view
 from .logger import RerunLogger
 from .views import ObjectView
 
-__all__ = ["CITYSCAPES_COLORS", "ObjectView", "RerunLogger", "track_color"]
+__all__ = ["CITYSCAPES_COLORS", "LidarView", "ObjectView", "RerunLogger", "lidar_view",
+           "track_color"]

@@ -20,6 +20,11 @@ CITYSCAPES_COLORS: dict[int, tuple[int, int, int]] = {
 
 #: colour of the static map points
 STATIC_POINT_COLOR = (150, 150, 150)
+#: colour of the frame's LiDAR returns (the paper's figure 1 (d) draws them black on white;
+#: the viewer's background is dark)
+LIDAR_COLOR = (210, 210, 210)
+#: colour of the LiDAR returns on the road (green, as in the paper's figure 1 (d))
+ROAD_LIDAR_COLOR = (40, 200, 60)
 #: colour of the camera trajectory
 CAMERA_TRAJECTORY_COLOR = (255, 200, 0)
 

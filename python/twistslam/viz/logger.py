@@ -10,6 +10,8 @@ Entity layout (world = first camera frame, x right, y down, z forward):
 ``world/camera/image/instances``    instance masks, one colour per instance
 ``world/camera/image/boxes``        2D boxes labelled ``id 12 car 34 km/h``
 ``world/static_points``             static map points (grey)
+``world/lidar/scan``                the frame's LiDAR returns (light grey)
+``world/lidar/road``                those on road pixels (green)
 ``world/objects/points``            object points, one colour per track
 ``world/objects/boxes``             3D boxes
 ``world/objects/trajectories``      object trajectories so far
@@ -28,8 +30,8 @@ from typing import Any
 import numpy as np
 
 from ._rerun import import_rerun
-from .colors import (CAMERA_TRAJECTORY_COLOR, CITYSCAPES_COLORS, STATIC_POINT_COLOR,
-                     rotation_to_quaternion_xyzw, track_color)
+from .colors import (CAMERA_TRAJECTORY_COLOR, CITYSCAPES_COLORS, LIDAR_COLOR, ROAD_LIDAR_COLOR,
+                     STATIC_POINT_COLOR, rotation_to_quaternion_xyzw, track_color)
 from .views import (ObjectView, check_array, check_image, check_label_image, check_object,
                     check_pose, check_scalars)
 
@@ -41,11 +43,17 @@ SEGMENTATION = "world/camera/image/segmentation"
 INSTANCES = "world/camera/image/instances"
 BOXES_2D = "world/camera/image/boxes"
 STATIC_POINTS = "world/static_points"
+LIDAR_SCAN = "world/lidar/scan"
+LIDAR_ROAD = "world/lidar/road"
 OBJECT_POINTS = "world/objects/points"
 OBJECT_BOXES = "world/objects/boxes"
 OBJECT_TRAJECTORIES = "world/objects/trajectories"
 CAMERA_TRAJECTORY = "world/camera_trajectory"
 SCALARS = "scalars"
+#: the map view's eye: this high above the first camera (m), looking down at the road this far
+#: ahead of it (m): KITTI's cars are tracked within ~50 m, the view spans ~60 m of road
+MAP_EYE_HEIGHT_M = 70.0
+MAP_LOOK_AHEAD_M = 20.0
 
 
 class RerunLogger:
@@ -107,6 +115,8 @@ class RerunLogger:
     def log_frame(self, index: int, *, image_left: np.ndarray, T_w_c: np.ndarray,
                   class_ids: np.ndarray | None = None, instance_ids: np.ndarray | None = None,
                   objects: Sequence[ObjectView] = (), static_points_w: np.ndarray | None = None,
+                  lidar_points_w: np.ndarray | None = None,
+                  road_lidar_points_w: np.ndarray | None = None,
                   scalars: dict[str, float] | None = None) -> None:
         """Log one frame on the ``frame`` timeline.
 
@@ -126,6 +136,11 @@ class RerunLogger:
             Tracked objects in this frame.
         static_points_w : (N, 3) array, optional
             Static map points in the world frame.
+        lidar_points_w : (N, 3) array, optional
+            The frame's LiDAR returns in the world frame (those off the road:
+            :func:`twistslam.viz.lidar_view.lidar_view`).
+        road_lidar_points_w : (M, 3) array, optional
+            Its returns on the road, shown green (the paper's figure 1 (d)).
         scalars : dict, optional
             Per-frame numbers (inliers, stage times in ms, ...), one time series each.
 
@@ -143,6 +158,10 @@ class RerunLogger:
         views = [check_object(view, i) for i, view in enumerate(objects)]
         static_points = None if static_points_w is None else check_array(
             static_points_w, (None, 3), "static_points_w")
+        lidar_points = None if lidar_points_w is None else check_array(
+            lidar_points_w, (None, 3), "lidar_points_w")
+        road_points = None if road_lidar_points_w is None else check_array(
+            road_lidar_points_w, (None, 3), "road_lidar_points_w")
         numbers = check_scalars(scalars)
 
         self._stream.set_time(TIMELINE, sequence=int(index))
@@ -151,6 +170,8 @@ class RerunLogger:
         self._log_objects_2d(views)
         self._log_objects_3d(views)
         self._log_points(STATIC_POINTS, static_points, STATIC_POINT_COLOR)
+        self._log_points(LIDAR_SCAN, lidar_points, LIDAR_COLOR, radius_ui=1.0)
+        self._log_points(LIDAR_ROAD, road_points, ROAD_LIDAR_COLOR, radius_ui=1.0)
         self._log_trajectories(pose, views)
         self._log_scalars(numbers)
 
@@ -186,10 +207,19 @@ class RerunLogger:
             self._stream.connect_grpc()
 
     def _default_layout(self) -> Any:
-        """The 3D scene beside the image (with masks and boxes) above the time series."""
+        """The 3D scene and the map from above (the paper's figure 1 (d): LiDAR returns, the
+        road's in green, the tracked cars' boxes, the camera frustum) beside the image with
+        masks and boxes labelled with id and speed (figure 1 (a)) above the time series."""
         rrb = self._rr.blueprint
+        # world = first camera frame, y down: "above" is -y; the eye follows the camera, the
+        # road ahead (+z) up in the view
+        from_above = rrb.EyeControls3D(position=[0.0, -MAP_EYE_HEIGHT_M, MAP_LOOK_AHEAD_M],
+                                       look_target=[0.0, 0.0, MAP_LOOK_AHEAD_M],
+                                       eye_up=[0.0, 0.0, 1.0], tracking_entity=CAMERA)
         return rrb.Blueprint(rrb.Horizontal(
-            rrb.Spatial3DView(origin=WORLD, name="3D"),
+            rrb.Vertical(rrb.Spatial3DView(origin=WORLD, name="3D"),
+                         rrb.Spatial3DView(origin=WORLD, name="map from above",
+                                           eye_controls=from_above)),
             rrb.Vertical(rrb.Spatial2DView(origin=IMAGE, name="left image"),
                          rrb.TimeSeriesView(origin=SCALARS, name="per frame"))))
 
@@ -256,12 +286,12 @@ class RerunLogger:
             radii=rr.Radius.ui_points(3.0)))
 
     def _log_points(self, entity: str, points: np.ndarray | None,
-                    color: tuple[int, int, int]) -> None:
+                    color: tuple[int, int, int], radius_ui: float = 2.0) -> None:
         if points is None:
             self._stream.log(entity, self._rr.Clear(recursive=False))
             return
         self._stream.log(entity, self._rr.Points3D(points, colors=color,
-                                                   radii=self._rr.Radius.ui_points(2.0)))
+                                                   radii=self._rr.Radius.ui_points(radius_ui)))
 
     def _log_trajectories(self, T_w_c: np.ndarray, views: list[ObjectView]) -> None:
         rr = self._rr

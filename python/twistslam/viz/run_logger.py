@@ -9,6 +9,8 @@ import numpy as np
 
 from ..objects.camera_boxes import CameraBoxRules
 from ..objects.visual import KITTI_TYPES, cluster_box
+from ..perception.panoptic import ROAD
+from .lidar_view import lidar_view
 from .logger import RerunLogger
 from .views import ObjectView
 
@@ -18,13 +20,15 @@ STATIC_POINTS_EVERY = 10
 
 
 class RunViewer:
-    """Logs each frame of a run: image, segmentation, camera, object clusters, stage times."""
+    """Logs each frame of a run: image, segmentation, camera, object clusters, the frame's
+    LiDAR returns (road returns apart, by ``road_class_id``), stage times."""
 
     def __init__(self, sequence, *, spawn: bool = False, save: str | Path | None = None,
-                 box_rules: CameraBoxRules = CameraBoxRules()) -> None:
+                 box_rules: CameraBoxRules = CameraBoxRules(), road_class_id: int = ROAD) -> None:
         self.logger = RerunLogger(spawn=spawn, save=save)
         self.sequence = sequence
         self.box_rules = box_rules
+        self.road_class_id = road_class_id
         self._camera_logged = False
         self._camera_poses: dict[int, np.ndarray] = {}  # frame -> T_w_c, the rows so far
 
@@ -60,12 +64,19 @@ class RunViewer:
         static = None
         if tracked.index % STATIC_POINTS_EVERY == 0:
             static = slam.map_points()["X_w"]
+        lidar = None
+        if frame.points_c is not None and slam.camera is not None:
+            lidar = lidar_view(frame.points_c, tracked.T_w_c, np.asarray(slam.camera.K),
+                               item.class_ids, self.road_class_id)
         scalars = {"inliers": float(tracked.num_inliers),
                    "objects_tracked": float(tracked.num_objects_tracked),
                    **{f"ms/{k}": float(v) for k, v in {**item.stage_ms, **tracked.timings_ms}.items()}}
         self.logger.log_frame(tracked.index, image_left=image, T_w_c=tracked.T_w_c,
                               class_ids=item.class_ids, instance_ids=item.instance_ids,
-                              objects=views, static_points_w=static, scalars=scalars)
+                              objects=views, static_points_w=static,
+                              lidar_points_w=None if lidar is None else lidar.scan_w,
+                              road_lidar_points_w=None if lidar is None else lidar.road_w,
+                              scalars=scalars)
 
     def close(self) -> None:
         self.logger.close()
