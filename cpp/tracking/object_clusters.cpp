@@ -299,6 +299,16 @@ void ObjectTracker::recenter(int c) {
   if (options_.recenter_max_spread_m > 0 && far &&
       detail::largest_quantile_spread(confirmed, kRecenterSpreadQuantile) > options_.recenter_max_spread_m)
     return;
+  // a cluster whose points are nearly all placed without a disparity (a car seen through a
+  // gap between nearer ones, which the right camera does not see: its points at the ground
+  // contact or their few stereo neighbours' depth) holds guessed depths that scatter by
+  // metres and drift in the windows; their median jumps between depth groups from frame to
+  // frame (crowded s6's queued car 15: moves of 1-4 m, the track 5 m short of the car), so the
+  // origin stays where the cluster was seeded
+  const double min_stereo = options_.recenter_min_stereo_fraction;
+  if (min_stereo > 0 &&
+      detail::confirmed_stereo_fraction(cluster, options_.recenter_with_retired_points) <= min_stereo)
+    return;
   // T_w_o' = T_w_o T_o_o' with T_o_o' a translation by centre: the twists of eq. 2 act on the
   // left (T_w_o(i+1) = exp(Pi xi) T_w_o(i)), so they are unchanged
   for (objects::TrackFrame& row : tracks_[c].frames)

@@ -2,6 +2,7 @@
 // Small helpers shared by the object tracker's search/update (object_tracker.cpp) and its
 // cluster life cycle (object_clusters.cpp). Internal to cpp/tracking.
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "geometry/types.hpp"
@@ -92,6 +93,19 @@ inline std::vector<Vec3> recenter_points(const objects::ObjectCluster& cluster, 
     if (static_cast<int>(stereo.size()) >= min_points) return stereo;
   }
   return collect(false);
+}
+
+// The fraction of the cluster's confirmed points (as recenter_points counts them, all of
+// them) that were seen in stereo at least once; NaN without confirmed points.
+inline double confirmed_stereo_fraction(const objects::ObjectCluster& cluster, bool with_retired) {
+  int stereo = 0, all = 0;
+  const auto count = [&](const objects::ObjectPoint& p) {
+    if (p.found >= 2) ++all, stereo += p.stereo_seen > 0;
+  };
+  for (const objects::ObjectPoint& p : cluster.points) count(p);
+  if (with_retired)
+    for (const objects::ObjectPoint& p : cluster.retired) count(p);
+  return all > 0 ? static_cast<double>(stereo) / all : std::nan("");
 }
 
 inline bool contains(const std::vector<int>& ids, int id) {

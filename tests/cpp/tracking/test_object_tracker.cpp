@@ -3,6 +3,8 @@
 // through the matched points.
 #include <gtest/gtest.h>
 
+#include <iostream>
+
 #include <opencv2/core.hpp>
 
 #include <algorithm>
@@ -337,17 +339,7 @@ TEST_F(TrackerScene, CarWithFewStereoDepthsStartsWithItsOtherKeypointsAtTheNeare
     Car s = stereo_part, m = mono_part;
     s.c0 = m.c0 = start;
     auto tracker = make_tracker(options, lidar);
-    std::vector<tracking::ObjectTrackingReport> reports;
-    for (int i = 0; i < 8; ++i) {
-      SceneFrame f(i);
-      f.add_car(s, i, instance_id(i));
-      f.mono = true;
-      f.add_car(m, i, instance_id(i));
-      f.mono = false;
-      f.add_background(background);
-      reports.push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
-                                      cv::Mat(), Vec4::Zero(), boxes));
-    }
+    auto reports = run_partly_stereo_car(tracker, s, m, background, 8, boxes);
     return std::make_pair(std::move(tracker), reports);
   };
   const tracking::ObjectTrackingOptions options;
@@ -387,6 +379,37 @@ TEST_F(TrackerScene, CarWithFewStereoDepthsStartsWithItsOtherKeypointsAtTheNeare
   EXPECT_TRUE(run(options, c0, {far_box}).first.tracks().empty());
   lidar.depth_fill_below_points = options.depth_fill_below_points;
   EXPECT_EQ(run(options, c0, {far_box}, lidar).first.tracks().size(), 1u);
+}
+
+// recenter_min_stereo_fraction: a cluster whose points are nearly all placed without a
+// disparity (5 stereo keypoints, 25 at their nearest stereo neighbour's depth, as a car seen
+// through a gap the right camera does not see) keeps the origin it was seeded at; with the rule
+// off, the median of its guessed points moves every row
+TEST_F(TrackerScene, AClusterOfGuessedDepthsKeepsItsSeededOrigin) {
+  const Vec3 c0(1.0, 0.9, 16), v(0, 0, 0.3);
+  const Car stereo_part = make_car(rng, c0, v, 0.0, 5);
+  Car mono_part = make_car(rng, c0, v, 0.0, 25);
+  // skewed across the car: 18 keypoints on its right half, 7 at its left edge, so that their
+  // mean (the seed's origin) and their median lie ~0.8 m apart
+  for (int k = 0; k < 25; ++k) mono_part.X_o[k].x() = k < 18 ? 1.0 + 0.5 * k / 17.0 : -2.0;
+  auto run = [&](const tracking::ObjectTrackingOptions& options, int frames) {
+    auto tracker = make_tracker(options);
+    run_partly_stereo_car(tracker, stereo_part, mono_part, background, frames);
+    EXPECT_EQ(tracker.tracks().size(), 1u);
+    return tracker.tracks().empty() ? Vec3(Vec3::Constant(1e9))
+                                    : Vec3(tracker.tracks()[0].frames[0].T_w_o.topRightCorner<3, 1>());
+  };
+  tracking::ObjectTrackingOptions options;
+  ASSERT_GE(options.recenter_min_stereo_fraction, 5.0 / 30.0);  // the premise: nearly all guessed
+  const Vec3 born = run(options, 1);
+  const Vec3 kept = run(options, 8);
+  tracking::ObjectTrackingOptions off = options;
+  off.recenter_min_stereo_fraction = 0.0;
+  const Vec3 moved = run(off, 8);
+  std::cout << "[ recenter ] guessed depths: first row moved " << (kept - born).norm()
+            << " m (rule off: " << (moved - born).norm() << " m)\n";
+  EXPECT_LT((kept - born).norm(), 0.05);
+  EXPECT_GT((moved - born).norm(), 0.5);
 }
 
 // untracked_contact_report_max_depth_m: a cluster never tracked whose re-seeded rows its

@@ -244,6 +244,27 @@ void run_car(tracking::ObjectTracker& tracker, const Car& car, const Background&
   }
 }
 
+// One car seen in two parts under one instance: the keypoints of `stereo_part` with a
+// disparity, those of `mono_part` without (the right camera sees past an occluder there).
+// Frames 0 .. frames - 1 with flow after the first; each frame's report, the 3D boxes given
+// to every frame.
+std::vector<tracking::ObjectTrackingReport> run_partly_stereo_car(
+    tracking::ObjectTracker& tracker, const Car& stereo_part, const Car& mono_part,
+    const Background& background, int frames, const std::vector<objects::Detection>& boxes = {}) {
+  std::vector<tracking::ObjectTrackingReport> reports;
+  for (int i = 0; i < frames; ++i) {
+    SceneFrame f(i);
+    f.add_car(stereo_part, i, instance_id(i));
+    f.mono = true;
+    f.add_car(mono_part, i, instance_id(i));
+    f.mono = false;
+    f.add_background(background);
+    reports.push_back(tracker.track(f.finish(), f.instances, i > 0 ? f.flow : cv::Mat(), kUp,
+                                    cv::Mat(), Vec4::Zero(), boxes));
+  }
+  return reports;
+}
+
 // A car whose keypoints take new descriptors every frame: no point is ever found again, so
 // each frame re-seeds its cluster from the instance's stereo points (the cluster never
 // tracked, each row one frame's stereo). Frames 0 .. frames - 1, no flow.
