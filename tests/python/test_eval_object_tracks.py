@@ -326,3 +326,53 @@ def test_ground_truth_reads_the_box_heights_of_label_02(sim):
         kept = set(selected_frames(track, gt.T_w_c).tolist())
         assert not kept & {f for t, f in small if t == tid}
         assert kept <= set(selected_frames(track, gt.T_w_c, min_box_height_px=0).tolist())
+
+
+def queued_gt(gap_m=0.8):
+    """Two moving cars in a queue along the camera's z, ``gap_m`` between bumper and bumper
+    (4 m long: a point in the gap lies inside both boxes grown by ``HIT_MARGIN_M``)."""
+    T_w_c = np.stack([pose(t=(0, 0, 0.5 * f)) for f in range(FRAMES)])
+    everywhere = np.ones(FRAMES, bool)
+    lead = np.stack([pose(-90.0, (0, 0.8, 12.0 + 0.5 * f)) for f in range(FRAMES)])
+    behind = lead.copy()
+    behind[:, 2, 3] -= 4.0 + gap_m
+    return SequenceGroundTruth(T_w_c=T_w_c, tracks={1: gt_track(1, True, lead, everywhere),
+                                                    2: gt_track(2, True, behind, everywhere)})
+
+
+def test_one_track_between_two_queued_cars_covers_one_of_them():
+    gt = queued_gt()
+    lead = gt.tracks[1].T_w_o
+    # the lead car's track sits on its rear bumper: inside the car behind's grown box too
+    on_rear = lead @ pose(t=(-1.9, 0, 0))
+    ev = evaluate_object_tracks([tracked(5, np.arange(FRAMES), on_rear)], gt.T_w_c, gt)
+    rows = {c.gt_id: c for c in ev.cars}
+    assert rows[1].coverage == 1.0 and rows[1].est_ids == [5]
+    assert rows[2].coverage == 0.0 and rows[2].est_ids == [] and np.isnan(rows[2].ate_aligned)
+    assert ev.n_tracked == 1 and ev.n_ghosts == 0
+
+
+def test_two_tracks_on_queued_cars_each_stand_for_their_own():
+    gt = queued_gt()
+    rng = np.random.default_rng(7)
+    # both tracks biased towards the gap (rear / front faces): inside both grown boxes
+    lead = tracked(5, np.arange(FRAMES), noisy(gt.tracks[1].T_w_o @ pose(t=(-1.9, 0, 0)), rng))
+    behind = tracked(6, np.arange(FRAMES), noisy(gt.tracks[2].T_w_o @ pose(t=(1.9, 0, 0)), rng))
+    ev = evaluate_object_tracks([behind, lead], gt.T_w_c, gt)
+    rows = {c.gt_id: c for c in ev.cars}
+    assert rows[1].est_ids == [5] and rows[2].est_ids == [6]
+    assert ev.n_tracked == 2
+
+
+def test_a_matched_track_keeps_its_car_while_inside_the_gate():
+    from twistslam.eval.track_assignment import assign_tracks
+
+    half = np.array([2.0, 0.85, 0.75])
+    box = {f: [(1, pose(), half)] for f in range(3)}
+    # track 5 on the car from frame 0; track 6 appears nearer its centre in frame 1
+    tracks = {0: [(5, np.array([1.8, 0, 0]))],
+              1: [(5, np.array([1.8, 0, 0])), (6, np.array([0.1, 0, 0]))],
+              2: [(5, np.array([4.0, 0, 0])), (6, np.array([0.1, 0, 0]))]}
+    pairs = assign_tracks(box, tracks, margin_m=1.0)
+    assert pairs[0] == {5: 1} and pairs[1] == {5: 1}  # no switch to the closer newcomer
+    assert pairs[2] == {6: 1}  # track 5 left the gate (4.0 > 2.0 + 1.0): the car goes to 6

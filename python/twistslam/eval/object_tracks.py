@@ -1,7 +1,9 @@
 """Visual object tracks against the simulator's ground truth (issue 10's targets).
 
 The ground truth, and which cars and frames are evaluated, is :mod:`.object_ground_truth`
-(re-exported here). Per car: coverage of its evaluated frames, and its pose errors.
+(re-exported here). Per car: coverage of its evaluated frames, and its pose errors. In each
+frame an estimated track stands for at most one object and the reverse (:mod:`.track_assignment`,
+the CLEAR MOT rule): a track between two queued cars covers one of them.
 
 Two variants of the pose errors of a car:
 
@@ -36,6 +38,7 @@ from .object_ground_truth import (  # noqa: F401  (re-exported: callers import t
 )
 from .object_poses import MIN_RPE_PATH_M, track_pose_errors  # noqa: F401  (re-exported)
 from .object_yaw import mean_yaw_error_deg
+from .track_assignment import assign_tracks
 from .trajectory import invert, rotation_angle
 
 #: an estimated position within the box grown by this much (m, every side) hits the object:
@@ -107,14 +110,15 @@ class CarTrackRow:
     ----------
     gt_id : ground-truth track id.
     frames : its evaluated frames (labelled, within range, box tall enough).
-    coverage : fraction of them with a hitting estimated track (any).
+    coverage : fraction of them in which an estimated track stands for it (one-to-one per
+        frame, :mod:`.track_assignment`).
     n_compared : evaluated frames where the main estimated track has a pose.
     path_m : ground-truth distance travelled over the compared frames (m).
     rpe_t, rpe_r, ate_aligned : aligned variant (m/m, deg/m, m), NaN without a main track;
         RPE is NaN (left out of the means) when ``path_m < MIN_RPE_PATH_M``.
     rpe_t_canonical, rpe_r_canonical, ate_canonical : canonical variant (no offset, no
         alignment; ATE in the ground-truth world seen through the estimated cameras).
-    est_ids : estimated tracks that hit it, main (most hits) first.
+    est_ids : estimated tracks that stood for it, main (most frames) first.
     offset : (4, 4) the removed ``T_off`` (identity when no main track).
     yaw_deg : mean heading error (deg, modulo 2 pi: a flipped box is 180) of the main track
         over the compared frames, each in its camera frame; NaN without a main track or
@@ -200,23 +204,20 @@ class ObjectTrackEvaluation:
 
 
 def _car_row(gt: SequenceGroundTruth, car: GtTrack, frames: np.ndarray,
-             mapped: dict[int, tuple], margin_m: float,
+             mapped: dict[int, tuple], assignment: dict[int, dict[int, int]],
              canonical_ids: set[int] | None = None,
              box_frames: dict[int, np.ndarray] | None = None) -> CarTrackRow:
     """Coverage and errors of one car; ``mapped`` = estimated tracks in the GT world;
+    ``assignment``: :func:`.track_assignment.assign_tracks`'s pairs (a frame counts for the
+    track that stands for this car in it, one-to-one);
     ``canonical_ids``: the tracks whose yaw is evaluated (None: every track);
     ``box_frames``: other tracks' ``T_o_box``, whose yaw is evaluated with it."""
-    half = car.half_extents()
     row_of = {int(f): k for k, f in enumerate(car.frames)}
     hits: dict[int, set[int]] = {}
-    for est_id, (est_frames, poses, _) in mapped.items():
-        common, ei, _ = np.intersect1d(est_frames, frames, return_indices=True)
-        if not len(common):
-            continue
-        gt_poses = car.T_w_o[[row_of[int(f)] for f in common]]
-        inside = inside_box(poses[ei, :3, 3], gt_poses, half, margin_m)
-        if inside.any():
-            hits[est_id] = set(common[inside].tolist())
+    for f in frames.tolist():
+        for est_id, gt_id in assignment.get(int(f), {}).items():
+            if gt_id == car.track_id:
+                hits.setdefault(est_id, set()).add(int(f))
     covered = set().union(*hits.values()) if hits else set()
     order = sorted(hits, key=lambda i: (-len(hits[i]), min(hits[i])))
     nan = float("nan")
@@ -243,15 +244,22 @@ def _car_row(gt: SequenceGroundTruth, car: GtTrack, frames: np.ndarray,
                        coverage=len(covered) / len(frames), est_ids=order, **values)
 
 
-def ghost_tracks(gt: SequenceGroundTruth, mapped: dict[int, tuple],
-                 margin_m: float = HIT_MARGIN_M) -> list[int]:
-    """Estimated tracks of ``GHOST_MIN_FRAMES``+ frames that hit no ground-truth object (any
-    class, moving or parked) in at least ``GHOST_MISS_FRACTION`` of their frames."""
-    by_frame: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
+def gt_boxes_by_frame(gt: SequenceGroundTruth) -> dict[int, list[tuple[int, np.ndarray, np.ndarray]]]:
+    """frame -> [(gt id, ``T_w_o``, half extents)] of every object (any class, hidden or not)."""
+    by_frame: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
     for track in gt.tracks.values():
         half = track.half_extents()
         for f, T in zip(track.frames.tolist(), track.T_w_o):
-            by_frame.setdefault(f, []).append((T, half))
+            by_frame.setdefault(f, []).append((track.track_id, T, half))
+    return by_frame
+
+
+def ghost_tracks(gt: SequenceGroundTruth, mapped: dict[int, tuple],
+                 margin_m: float = HIT_MARGIN_M) -> list[int]:
+    """Estimated tracks of ``GHOST_MIN_FRAMES``+ frames that hit no ground-truth object (any
+    class, moving or parked) in at least ``GHOST_MISS_FRACTION`` of their frames (a second
+    track on an object is no ghost: it is where an object is)."""
+    by_frame = gt_boxes_by_frame(gt)
     ghosts = []
     for est_id, (frames, poses, _) in mapped.items():
         if len(frames) < GHOST_MIN_FRAMES:
@@ -262,8 +270,8 @@ def ghost_tracks(gt: SequenceGroundTruth, mapped: dict[int, tuple],
             if not boxes:
                 misses += 1
                 continue
-            T = np.stack([b[0] for b in boxes])
-            half = np.stack([b[1] for b in boxes])
+            T = np.stack([b[1] for b in boxes])
+            half = np.stack([b[2] for b in boxes])
             misses += not inside_box(np.repeat(P[None, :3, 3], len(T), 0), T, half, margin_m).any()
         if misses >= GHOST_MISS_FRACTION * len(frames):
             ghosts.append(est_id)
@@ -309,7 +317,12 @@ def evaluate_object_tracks(objects, camera_poses: np.ndarray, gt: SequenceGround
                           max_truncation)
     canonical = None if canonical_ids is None else {int(i) for i in canonical_ids}
     boxes = {int(k): np.asarray(v, dtype=np.float64) for k, v in (box_frames or {}).items()}
-    rows = [_car_row(gt, gt.tracks[tid], frames, mapped, margin_m, canonical, boxes)
+    est_positions: dict[int, list[tuple[int, np.ndarray]]] = {}
+    for est_id, (est_frames, poses, _) in mapped.items():
+        for f, P in zip(est_frames.tolist(), poses):
+            est_positions.setdefault(f, []).append((est_id, P[:3, 3]))
+    assignment = assign_tracks(gt_boxes_by_frame(gt), est_positions, margin_m)
+    rows = [_car_row(gt, gt.tracks[tid], frames, mapped, assignment, canonical, boxes)
             for tid, frames in cars.items()]
     return ObjectTrackEvaluation(cars=rows, ghost_ids=ghost_tracks(gt, mapped, margin_m))
 
