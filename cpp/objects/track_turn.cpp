@@ -30,4 +30,30 @@ bool level_made_up_turn(ObjectTrack* track, double max_deg_per_frame) {
   return true;
 }
 
+int bound_turn_by_travel(ObjectTrack* track, double min_turn_radius_m) {
+  const int rows = static_cast<int>(track->frames.size());
+  if (!(min_turn_radius_m > 0) || rows < 2) return 0;
+  int changed = 0;
+  Mat3 R_previous_original = track->frames[0].T_w_o.topLeftCorner<3, 3>();
+  for (int r = 1; r < rows; ++r) {
+    Mat4& T = track->frames[r].T_w_o;
+    const Mat3 R_original = T.topLeftCorner<3, 3>();
+    const Vec3 turn = geometry::so3_log(R_original * R_previous_original.transpose());
+    const double travelled_m =
+        (T.topRightCorner<3, 1>() - track->frames[r - 1].T_w_o.topRightCorner<3, 1>()).norm();
+    const double max_turn_rad = travelled_m / min_turn_radius_m;
+    const double turn_rad = turn.norm();
+    R_previous_original = R_original;
+    if (turn_rad <= max_turn_rad && changed == 0) continue;  // rows so far as they were
+    const Vec3 kept = turn_rad > max_turn_rad ? Vec3(turn * (max_turn_rad / turn_rad)) : turn;
+    changed += turn_rad > max_turn_rad;
+    T.topLeftCorner<3, 3>() =
+        geometry::so3_exp(kept) * track->frames[r - 1].T_w_o.topLeftCorner<3, 3>();
+  }
+  if (changed == 0) return 0;
+  for (int r = 0; r + 1 < rows; ++r)  // eq. 2 between the bounded rows
+    track->frames[r].xi = track->Pi * geometry::twist_between(track->frames[r].T_w_o, track->frames[r + 1].T_w_o);
+  return changed;
+}
+
 }  // namespace twistslam::objects

@@ -15,4 +15,13 @@ double mean_turn_deg_per_frame(const ObjectTrack& track);
 // twists of eq. 2 are recomputed between the levelled rows. Returns whether it levelled.
 bool level_made_up_turn(ObjectTrack* track, double max_deg_per_frame);
 
+// A car turns only as it travels: its heading changes by at most (distance travelled) /
+// (turning radius). Each row's rotation since the previous row is shortened to
+// |t_r - t_r-1| / min_turn_radius_m (rad) when larger, the rows' positions kept (the track's
+// path is measured; a far camera-only cluster's spin about the vertical is not: the twist of a
+// car seen nearly end-on hardly observes it, and e_const keeps a constant spin). The twists
+// of eq. 2 are recomputed. Returns the number of rows whose rotation changed (0 when
+// min_turn_radius_m <= 0).
+int bound_turn_by_travel(ObjectTrack* track, double min_turn_radius_m);
+
 }  // namespace twistslam::objects

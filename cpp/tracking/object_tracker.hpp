@@ -248,6 +248,9 @@ class ObjectTracker : public ObjectBundleTerms {
   // sight to the returns' depth (lidar_objects.far_lidar_align_*; object_lidar_align.cpp).
   void keep_far_lidar_returns(const Frame& frame);
   void align_far_rows_to_lidar(const std::map<int, Mat4>& T_c_w_of_frame);
+  // After the final smoothing: camera-only vehicle tracks' rows turn at most as far as they
+  // travel allows (objects::bound_turn_by_travel, min_turn_radius_m; object_windows.cpp).
+  void bound_camera_only_turns();
   // The frame's boxes no track took, kept for backfill_frames frames (object_backfill.cpp).
   void remember_unused_boxes(const Frame& frame);
   // A new canonical track c: the unused boxes of the frames before its first one that line up

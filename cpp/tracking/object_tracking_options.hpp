@@ -114,6 +114,9 @@ struct ObjectTrackingOptions {
   // no re-centring while at most this fraction of the confirmed points were ever seen in
   // stereo: the others hold guessed depths, whose median is no centre (0: off; config.py)
   double recenter_min_stereo_fraction = 0.2;
+  // a camera-only vehicle track's final rows turn at most (distance travelled) / this (m):
+  // a car's turning radius (objects/track_turn.hpp; 0: off; config.py says why)
+  double min_turn_radius_m = 5.0;
   // once the sequence ends, every track's rows, all observations of its points and its LiDAR
   // terms in one problem (tracking/object_smoothing.cpp); the online poses are kept beside
   bool final_smoothing = true;
@@ -235,6 +238,7 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("recenter_with_retired_points", o.recenter_with_retired_points, 0, 1);
   visit("recenter_on_stereo_points", o.recenter_on_stereo_points, 0, 1);
   visit("recenter_min_stereo_fraction", o.recenter_min_stereo_fraction, 0.0, 1.0);
+  visit("min_turn_radius_m", o.min_turn_radius_m, 0.0, 1000.0);
   visit("final_smoothing", o.final_smoothing, 0, 1);
   visit("smoothing_iterations", o.smoothing_iterations, 1, 1000);
   visit("smoothing_frame_observations", o.smoothing_frame_observations, 0, 1000000);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "geometry/se3.hpp"
+#include "objects/track_turn.hpp"
 #include "tracking/object_point_helpers.hpp"
 #include "tracking/object_tracker.hpp"
 
@@ -255,6 +256,7 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
     retest_see_through(T_c_w_of_frame);
     retest_lidar_contradiction();
     align_far_rows_to_lidar(T_c_w_of_frame);
+    bound_camera_only_turns();
     return report;
   }
   for (int c = 0; c < static_cast<int>(tracks_.size()); ++c) {
@@ -324,7 +326,15 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
   retest_see_through(T_c_w_of_frame);
   retest_lidar_contradiction();
   align_far_rows_to_lidar(T_c_w_of_frame);
+  bound_camera_only_turns();
   return report;
+}
+
+void ObjectTracker::bound_camera_only_turns() {
+  // last: the checks above project the points with the rows' rotations as the windows left them
+  for (objects::ObjectTrack& track : tracks_)
+    if (track.link == geometry::LinkType::kPlanar && !track.canonical)
+      objects::bound_turn_by_travel(&track, options_.min_turn_radius_m);
 }
 
 }  // namespace twistslam::tracking
