@@ -1,7 +1,9 @@
 #pragma once
 // How fast a track's rows turn, and levelling a turn a cluster made up (tracking's first box,
 // object_canonical.cpp): a far cluster's twist from a handful of points can spin its frame by
-// ~10 deg/frame while the car drives straight; no car turns that fast at 10 Hz.
+// ~10 deg/frame while the car drives straight; no car turns that fast at 10 Hz. And bounding
+// each row's turn by the distance it travelled (camera-only tracks' final rows,
+// object_windows.cpp): a car turns only as it drives.
 #include "objects/object_track.hpp"
 
 namespace twistslam::objects {
