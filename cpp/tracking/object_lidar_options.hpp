@@ -112,6 +112,9 @@ struct ObjectLidarOptions {
   double far_lidar_align_ramp_m = 15.0;
   double far_lidar_align_max_ratio = 0.15;
   int far_lidar_align_min_rows = 3;
+  // ... a nearer move stops where the track's origin meets the median depth of its returns
+  // (the face the LiDAR sees; tracking/object_lidar_align.hpp, far_surface_floor)
+  bool far_lidar_align_surface_floor = true;
   // point-extent boxes (Detection::point_extent) laid from their near end, the car's length
   // from this quantile of theirs (off: every box as an estimate, the median length)
   bool point_extent_lengths = false;
@@ -221,6 +224,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("far_lidar_align_ramp_m", o.far_lidar_align_ramp_m, 0.0, 1000.0);
   visit("far_lidar_align_max_ratio", o.far_lidar_align_max_ratio, 0.0, 1.0);
   visit("far_lidar_align_min_rows", o.far_lidar_align_min_rows, 1, 1000000);
+  visit("far_lidar_align_surface_floor", o.far_lidar_align_surface_floor, 0, 1);
   visit("point_extent_lengths", o.point_extent_lengths, 0, 1);
   visit("point_extent_length_quantile", o.point_extent_length_quantile, 0.0, 1.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);

@@ -316,6 +316,14 @@ class LidarObjectsConfig:
     far_lidar_align_min_rows: int = param(
         3, "... rows with a ratio before the track's median moves it", "rows", lo=1,
         hi=1000000)
+    far_lidar_align_surface_floor: bool = param(
+        True, "... a move nearer stops where the track's origin (its points' median, on the "
+        "faces the camera sees) meets the median depth of the returns on its mask: the ratio "
+        "goes below 1 also when a far track's lagging depth motion smeared its points behind "
+        "its origin, and then pulled the origin in front of the car (urban s26's lead car at "
+        "55-66 m: returns on its rear at 56 m, origin moved 56.9 -> 54.7 m, a ghost; its oncoming "
+        "car 6 at 54 m moved 2.3 m in front of its centre). Measured: docs/visual_objects.md, "
+        "'The alignment stops at the LiDAR's surface'")
     point_extent_lengths: bool = param(
         False, "boxes that are the tight extent of their points (Detections3D.point_extent, "
         "the classical detector) are laid from their end nearer the sensor, the car's length "

@@ -1,0 +1,78 @@
+// The floor of the far rows' alignment (tracking/object_lidar_align.hpp): the scale that puts a
+// track's origin on the face its LiDAR returns measure, from the reported far rows that kept
+// returns, in the camera frame of each row's own pose.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <vector>
+
+#include "tracking/object_lidar_align.hpp"
+
+namespace twistslam {
+namespace {
+
+// A row at `depth` m straight ahead of a camera at world x = camera_x, with `returns` LiDAR
+// returns at return_depth m (0: none kept).
+objects::TrackFrame far_row(int frame, double camera_x, double depth, double return_depth,
+                            int returns = 20, bool reported = true) {
+  objects::TrackFrame row;
+  row.frame = frame;
+  row.reported = reported;
+  row.T_w_o = Mat4::Identity();
+  row.T_w_o.topRightCorner<3, 1>() = Vec3(camera_x, 0.0, depth);
+  row.far_lidar_returns.resize(returns, 3);
+  for (int i = 0; i < returns; ++i)  // spread +-0.5 m around their median
+    row.far_lidar_returns.row(i) << 600.0 + i, 180.0, return_depth + (i - returns / 2) * 0.05;
+  return row;
+}
+
+std::map<int, Mat4> cameras_at_x(int frames, double step_x) {
+  std::map<int, Mat4> T_c_w;
+  for (int f = 0; f < frames; ++f) {
+    T_c_w[f] = Mat4::Identity();
+    T_c_w[f](0, 3) = -step_x * f;  // the camera at world x = step_x f
+  }
+  return T_c_w;
+}
+
+TEST(FarSurfaceFloor, TheMedianRowSaysHowFarTheOriginMayComeNearer) {
+  objects::ObjectTrack track;
+  const double origins[] = {54.7, 55.0, 56.0, 57.0, 58.0};
+  const double surfaces[] = {56.0, 56.1, 56.5, 57.5, 60.0};
+  for (int f = 0; f < 5; ++f) track.frames.push_back(far_row(f, 2.0 * f, origins[f], surfaces[f]));
+  const std::map<int, Mat4> T_c_w = cameras_at_x(5, 2.0);
+  std::vector<double> floors;
+  for (int f = 0; f < 5; ++f) floors.push_back(surfaces[f] / origins[f]);
+  std::sort(floors.begin(), floors.end());
+  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0), floors[2], 1e-12);
+}
+
+TEST(FarSurfaceFloor, NearUnreportedUnposedAndReturnlessRowsDoNotCount) {
+  objects::ObjectTrack track;
+  track.frames.push_back(far_row(0, 0.0, 50.0, 51.0));                  // counts: 1.02
+  track.frames.push_back(far_row(1, 0.0, 20.0, 40.0));                  // nearer than 30 m
+  track.frames.push_back(far_row(2, 0.0, 50.0, 80.0, 20, false));       // not reported
+  track.frames.push_back(far_row(3, 0.0, 50.0, 80.0, 0));               // no returns kept
+  track.frames.push_back(far_row(9, 0.0, 50.0, 80.0));                  // no camera pose
+  const std::map<int, Mat4> T_c_w = cameras_at_x(4, 0.0);
+  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0), 51.0 / 50.0, 1e-12);
+  track.frames.erase(track.frames.begin());
+  EXPECT_EQ(tracking::far_surface_floor(track, T_c_w, 30.0), 0.0) << "no row qualifies";
+}
+
+TEST(FarSurfaceFloor, DepthIsTakenInEachRowsCameraFrame) {
+  objects::ObjectTrack track;
+  // world z 60 m, seen from cameras 0, 10 and 20 m along their optical axis: depths 60, 50
+  // and 40 m, each 2 m short of its returns
+  for (int f = 0; f < 3; ++f) track.frames.push_back(far_row(f, 0.0, 60.0, 62.0 - 10.0 * f));
+  std::map<int, Mat4> T_c_w;
+  for (int f = 0; f < 3; ++f) {
+    T_c_w[f] = Mat4::Identity();
+    T_c_w[f](2, 3) = -10.0 * f;
+  }
+  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0), 52.0 / 50.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace twistslam
