@@ -71,7 +71,7 @@ void ObjectTracker::keep_far_lidar_returns(const Frame& frame) {
 // pulled the origin in front of the car (urban s26's lead car at 55-66 m: the returns on its
 // rear at 56 m, the origin moved from 56.9 to 54.7 m, a ghost).
 double far_surface_floor(const objects::ObjectTrack& track, const std::map<int, Mat4>& T_c_w_of_frame,
-                         double min_depth_m) {
+                         double min_depth_m, double quantile) {
   std::vector<double> floors;
   for (const objects::TrackFrame& row : track.frames) {
     const auto pose = T_c_w_of_frame.find(row.frame);
@@ -80,7 +80,9 @@ double far_surface_floor(const objects::ObjectTrack& track, const std::map<int, 
     if (depth < min_depth_m) continue;
     std::vector<double> returns;
     for (Eigen::Index i = 0; i < row.far_lidar_returns.rows(); ++i) returns.push_back(row.far_lidar_returns(i, 2));
-    floors.push_back(median_value(returns) / depth);
+    const auto at = returns.begin() + static_cast<std::ptrdiff_t>(quantile * static_cast<double>(returns.size() - 1));
+    std::nth_element(returns.begin(), at, returns.end());
+    floors.push_back(*at / depth);
   }
   return floors.empty() ? 0.0 : median_value(floors);
 }
@@ -114,8 +116,9 @@ void ObjectTracker::align_far_rows_to_lidar(const std::map<int, Mat4>& T_c_w_of_
     if (static_cast<int>(row_ratios.size()) < o.far_lidar_align_min_rows) continue;
     double ratio = median_value(row_ratios);
     if (ratio < 1.0 && o.far_lidar_align_surface_floor)  // nearer, but not past its surface
-      ratio = std::min(1.0, std::max(ratio, far_surface_floor(track, T_c_w_of_frame,
-                                                              o.far_lidar_align_min_depth_m)));
+      ratio = std::min(1.0, std::max(ratio, far_surface_floor(track, T_c_w_of_frame, o.far_lidar_align_min_depth_m,
+                                                              o.far_lidar_align_surface_quantile) -
+                                                o.far_lidar_align_surface_margin));
     for (objects::TrackFrame& row : track.frames) {
       const auto pose = T_c_w_of_frame.find(row.frame);
       if (!row.reported || pose == T_c_w_of_frame.end()) continue;

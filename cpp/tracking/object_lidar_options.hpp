@@ -112,9 +112,11 @@ struct ObjectLidarOptions {
   double far_lidar_align_ramp_m = 15.0;
   double far_lidar_align_max_ratio = 0.15;
   int far_lidar_align_min_rows = 3;
-  // ... a nearer move stops where the track's origin meets the median depth of its returns
-  // (the face the LiDAR sees; tracking/object_lidar_align.hpp, far_surface_floor)
+  // ... a nearer move stops where the track's origin meets this quantile of its returns'
+  // depth (the face the LiDAR sees; tracking/object_lidar_align.hpp, far_surface_floor)
   bool far_lidar_align_surface_floor = true;
+  double far_lidar_align_surface_quantile = 0.1;
+  double far_lidar_align_surface_margin = 0.01;  // ... less this fraction of the origin's depth
   // point-extent boxes (Detection::point_extent) laid from their near end, the car's length
   // from this quantile of theirs (off: every box as an estimate, the median length)
   bool point_extent_lengths = false;
@@ -225,6 +227,8 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("far_lidar_align_max_ratio", o.far_lidar_align_max_ratio, 0.0, 1.0);
   visit("far_lidar_align_min_rows", o.far_lidar_align_min_rows, 1, 1000000);
   visit("far_lidar_align_surface_floor", o.far_lidar_align_surface_floor, 0, 1);
+  visit("far_lidar_align_surface_quantile", o.far_lidar_align_surface_quantile, 0.0, 1.0);
+  visit("far_lidar_align_surface_margin", o.far_lidar_align_surface_margin, 0.0, 1.0);
   visit("point_extent_lengths", o.point_extent_lengths, 0, 1);
   visit("point_extent_length_quantile", o.point_extent_length_quantile, 0.0, 1.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);

@@ -1,6 +1,6 @@
 // The floor of the far rows' alignment (tracking/object_lidar_align.hpp): the scale that puts a
-// track's origin on the face its LiDAR returns measure, from the reported far rows that kept
-// returns, in the camera frame of each row's own pose.
+// track's origin on the face its LiDAR returns measure (a quantile of their depths), from the
+// reported far rows that kept returns, in the camera frame of each row's own pose.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,14 +15,14 @@ namespace {
 // A row at `depth` m straight ahead of a camera at world x = camera_x, with `returns` LiDAR
 // returns at return_depth m (0: none kept).
 objects::TrackFrame far_row(int frame, double camera_x, double depth, double return_depth,
-                            int returns = 20, bool reported = true) {
+                            int returns = 21, bool reported = true) {
   objects::TrackFrame row;
   row.frame = frame;
   row.reported = reported;
   row.T_w_o = Mat4::Identity();
   row.T_w_o.topRightCorner<3, 1>() = Vec3(camera_x, 0.0, depth);
   row.far_lidar_returns.resize(returns, 3);
-  for (int i = 0; i < returns; ++i)  // spread +-0.5 m around their median
+  for (int i = 0; i < returns; ++i)  // 0.05 m apart around return_depth (21: +-0.5 m)
     row.far_lidar_returns.row(i) << 600.0 + i, 180.0, return_depth + (i - returns / 2) * 0.05;
   return row;
 }
@@ -45,20 +45,29 @@ TEST(FarSurfaceFloor, TheMedianRowSaysHowFarTheOriginMayComeNearer) {
   std::vector<double> floors;
   for (int f = 0; f < 5; ++f) floors.push_back(surfaces[f] / origins[f]);
   std::sort(floors.begin(), floors.end());
-  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0), floors[2], 1e-12);
+  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0, 0.5), floors[2], 1e-12);
+}
+
+TEST(FarSurfaceFloor, TheFaceIsAQuantileOfTheReturnsDepth) {
+  objects::ObjectTrack track;
+  track.frames.push_back(far_row(0, 0.0, 50.0, 52.0, 21));  // 21 returns 51.5 ... 52.5 m
+  const std::map<int, Mat4> T_c_w = cameras_at_x(1, 0.0);
+  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0, 0.0), 51.5 / 50.0, 1e-12);
+  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0, 0.1), 51.6 / 50.0, 1e-12);
+  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0, 1.0), 52.5 / 50.0, 1e-12);
 }
 
 TEST(FarSurfaceFloor, NearUnreportedUnposedAndReturnlessRowsDoNotCount) {
   objects::ObjectTrack track;
   track.frames.push_back(far_row(0, 0.0, 50.0, 51.0));                  // counts: 1.02
   track.frames.push_back(far_row(1, 0.0, 20.0, 40.0));                  // nearer than 30 m
-  track.frames.push_back(far_row(2, 0.0, 50.0, 80.0, 20, false));       // not reported
+  track.frames.push_back(far_row(2, 0.0, 50.0, 80.0, 21, false));       // not reported
   track.frames.push_back(far_row(3, 0.0, 50.0, 80.0, 0));               // no returns kept
   track.frames.push_back(far_row(9, 0.0, 50.0, 80.0));                  // no camera pose
   const std::map<int, Mat4> T_c_w = cameras_at_x(4, 0.0);
-  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0), 51.0 / 50.0, 1e-12);
+  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0, 0.5), 51.0 / 50.0, 1e-12);
   track.frames.erase(track.frames.begin());
-  EXPECT_EQ(tracking::far_surface_floor(track, T_c_w, 30.0), 0.0) << "no row qualifies";
+  EXPECT_EQ(tracking::far_surface_floor(track, T_c_w, 30.0, 0.5), 0.0) << "no row qualifies";
 }
 
 TEST(FarSurfaceFloor, DepthIsTakenInEachRowsCameraFrame) {
@@ -71,7 +80,7 @@ TEST(FarSurfaceFloor, DepthIsTakenInEachRowsCameraFrame) {
     T_c_w[f] = Mat4::Identity();
     T_c_w[f](2, 3) = -10.0 * f;
   }
-  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0), 52.0 / 50.0, 1e-12);
+  EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0, 0.5), 52.0 / 50.0, 1e-12);
 }
 
 }  // namespace
