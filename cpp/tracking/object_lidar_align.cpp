@@ -79,8 +79,10 @@ double far_surface_floor(const objects::ObjectTrack& track, const std::map<int, 
     const double depth = (pose->second * row.T_w_o)(2, 3);
     if (depth < min_depth_m) continue;
     std::vector<double> returns;
-    for (Eigen::Index i = 0; i < row.far_lidar_returns.rows(); ++i) returns.push_back(row.far_lidar_returns(i, 2));
-    const auto at = returns.begin() + static_cast<std::ptrdiff_t>(quantile * static_cast<double>(returns.size() - 1));
+    for (Eigen::Index i = 0; i < row.far_lidar_returns.rows(); ++i)
+      returns.push_back(row.far_lidar_returns(i, 2));
+    const auto at =
+        returns.begin() + static_cast<std::ptrdiff_t>(quantile * static_cast<double>(returns.size() - 1));
     std::nth_element(returns.begin(), at, returns.end());
     floors.push_back(*at / depth);
   }
@@ -115,10 +117,14 @@ void ObjectTracker::align_far_rows_to_lidar(const std::map<int, Mat4>& T_c_w_of_
     }
     if (static_cast<int>(row_ratios.size()) < o.far_lidar_align_min_rows) continue;
     double ratio = median_value(row_ratios);
-    if (ratio < 1.0 && o.far_lidar_align_surface_floor)  // nearer, but not past its surface
-      ratio = std::min(1.0, std::max(ratio, far_surface_floor(track, T_c_w_of_frame, o.far_lidar_align_min_depth_m,
-                                                              o.far_lidar_align_surface_quantile) -
-                                                o.far_lidar_align_surface_margin));
+    if (ratio < 1.0 && o.far_lidar_align_surface_floor) {
+      // nearer, but not past the face its returns measure, less the margin (a ratio: the margin
+      // is that fraction of the origin's depth)
+      const double lowest = far_surface_floor(track, T_c_w_of_frame, o.far_lidar_align_min_depth_m,
+                                              o.far_lidar_align_surface_quantile) -
+                            o.far_lidar_align_surface_margin;
+      ratio = std::min(1.0, std::max(ratio, lowest));
+    }
     for (objects::TrackFrame& row : track.frames) {
       const auto pose = T_c_w_of_frame.find(row.frame);
       if (!row.reported || pose == T_c_w_of_frame.end()) continue;
