@@ -226,3 +226,29 @@ TEST(PngDecoder, DamagedStreamsAreDeclinedNeverDecodedWrong) {
   }
   std::remove(path.c_str());
 }
+
+// Every byte of a plain PNG is under a chunk CRC (the signature under the decoder's own check):
+// any one flipped byte, and any cut, is declined; never a crash (the sanitizer build runs this
+// too) and never other pixels.
+TEST(PngDecoder, NoFlippedByteOrCutDecodesToOtherPixels) {
+  const cv::Mat rgb = random_rgb(12, 17, 11);
+  PngParts parts;
+  parts.before_data = {{"tEXt", Bytes{'k', 0, 'v'}}};
+  const Bytes png = png_file(rgb, zlib_stream(filtered_rows(rgb, 4)), parts);
+  cv::RNG rng(2026);
+  int declined = 0;
+  for (size_t at = 0; at < png.size(); ++at) {
+    Bytes flipped = png;
+    flipped[at] ^= static_cast<std::uint8_t>(1 + rng.uniform(0, 255));  // never a zero xor
+    cv::Mat decoded;
+    if (decode_plain_rgb8_png(flipped.data(), flipped.size(), &decoded))
+      EXPECT_TRUE(same(decoded, rgb)) << "byte " << at;
+    else
+      ++declined;
+  }
+  EXPECT_EQ(declined, static_cast<int>(png.size())) << "a flip in a checked byte was accepted";
+  for (size_t length = 0; length < png.size(); ++length) {
+    cv::Mat decoded;
+    EXPECT_FALSE(decode_plain_rgb8_png(png.data(), length, &decoded)) << "cut at " << length;
+  }
+}
