@@ -29,7 +29,8 @@ def read_image(path: PathLike) -> np.ndarray:
     :data:`MAX_IMAGE_PIXELS` pixels or of a kind that is not an 8- or 16-bit picture.
     An 8-bit colour PNG (KITTI's and the simulator's images) is decoded by the C++ core
     without the GIL (libdeflate, cpp/io/png_decoder.hpp: 5.5 ms per KITTI image against
-    10.8 with OpenCV's libpng and ~14 with Pillow, the same pixels); every other kind by Pillow.
+    10.8 with OpenCV's libpng, about half Pillow's time in ``benchmarks/bench_images.py``, the
+    same pixels); every other kind by Pillow.
     """
     if _is_rgb8_png(path):
         from .._core import io as _io  # the core only when such an image is read
