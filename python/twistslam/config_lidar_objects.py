@@ -326,8 +326,9 @@ class LidarObjectsConfig:
         "alignment stops at the LiDAR's surface'")
     far_lidar_align_surface_quantile: float = param(
         0.1, "... that face: this quantile of the depths of the returns on the row's mask (the "
-        "median over the track's rows of quantile / origin depth). With the median the floor bound too often: "
-        "a car seen obliquely has returns along its side, deeper than its origin (42 sequences "
+        "median over the track's rows of quantile / origin depth). With the median the floor "
+        "bound too often: a car seen obliquely has returns along its side, deeper than its "
+        "origin (42 sequences "
         "x 2 flows: 90 car rows changed by more than 5 mm, either way; with 0.1, 29)",
         "fraction", lo=0.0, hi=1.0)
     far_lidar_align_surface_margin: float = param(
