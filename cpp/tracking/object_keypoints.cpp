@@ -8,6 +8,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "features/right_occlusion.hpp"
+
 namespace twistslam::tracking {
 namespace {
 
@@ -170,7 +172,10 @@ ObjectKeypointExtractor::ObjectKeypointExtractor(const features::OrbOptions& mai
       instance_pixel_min_fraction_(static_cast<float>(options.instance_pixel_min_fraction)),
       pulled_nearer_check_(options.pulled_nearer_check),
       pulled_nearer_min_depth_m_(static_cast<float>(options.pulled_nearer_min_depth_m)),
-      pulled_nearer_max_px_(static_cast<float>(options.pulled_nearer_max_px)) {
+      pulled_nearer_max_px_(static_cast<float>(options.pulled_nearer_max_px)),
+      right_occlusion_check_(options.right_occlusion_check),
+      right_occlusion_margin_px_(static_cast<float>(options.right_occlusion_margin_px)),
+      right_occlusion_min_keypoints_(options.right_occlusion_min_keypoints) {
   search_ = object_stereo_search(options);
 }
 
@@ -255,6 +260,12 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
                                              on_objects, instances, instance_pixel_min_fraction_,
                                              pulled_nearer_min_depth_m_, pulled_nearer_max_px_,
                                              &f->matches)
+            .num_dropped;
+  if (right_occlusion_check_ && !instances.empty())
+    report.num_right_occluded_dropped =
+        features::drop_matches_occluded_in_right(left, on_objects, instances,
+                                                 right_occlusion_margin_px_,
+                                                 right_occlusion_min_keypoints_, &f->matches)
             .num_dropped;
   if (left_right_check_)
     report.num_left_right_removed =

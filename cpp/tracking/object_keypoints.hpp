@@ -25,6 +25,7 @@ struct ObjectKeypointReport {
   int num_instance_rescanned = 0;  // edge keypoints whose depth was searched on their instance
   int num_instance_dropped = 0;    // ... and found none there
   int num_pulled_nearer_dropped = 0;  // far vehicle keypoints a nearer occluder pulled (dropped)
+  int num_right_occluded_dropped = 0;  // vehicle keypoints a nearer vehicle hides from the right camera
 };
 
 // CV_8UC1 mask, 255 on pixels of an instance (instances > 0) whose class (labels; any class
@@ -64,7 +65,9 @@ class ObjectKeypointExtractor {
   // then holds fewer than extra_min_instance_keypoints keypoints gets a second pass on its own
   // mask, when it covers at least extra_min_instance_area_px pixels; with pulled_nearer_check,
   // those instances' far keypoints that a nearer occluder pulled lose their depth
-  // (features::drop_matches_pulled_nearer).
+  // (features::drop_matches_pulled_nearer); with right_occlusion_check, those instances'
+  // keypoints that a nearer one hides from the right camera lose theirs
+  // (features::drop_matches_occluded_in_right).
   ObjectKeypointReport extract(const cv::Mat& gray_left, const cv::Mat& object_mask,
                                const geometry::StereoCamera& camera,
                                features::StereoFeatures* features,
@@ -84,6 +87,9 @@ class ObjectKeypointExtractor {
   bool pulled_nearer_check_;
   float pulled_nearer_min_depth_m_;
   float pulled_nearer_max_px_;
+  bool right_occlusion_check_;
+  float right_occlusion_margin_px_;
+  int right_occlusion_min_keypoints_;
 };
 
 }  // namespace twistslam::tracking

@@ -168,6 +168,13 @@ struct ObjectTrackingOptions {
   // the stuff classes that count as another object beside a keypoint too (Cityscapes pole,
   // traffic light, traffic sign, vegetation: tree trunks and posts in front of parked cars)
   std::vector<int> pulled_nearer_occluder_class_ids{17, 19, 20, 21};
+  // vehicle keypoints the right camera cannot see (left of a nearer vehicle's left edge, within
+  // the two disparities' difference plus right_occlusion_margin_px, level-0 px) lose their
+  // depth (features::drop_matches_occluded_in_right); an instance's disparity is the median of
+  // at least right_occlusion_min_keypoints matched keypoints on it
+  bool right_occlusion_check = true;
+  double right_occlusion_margin_px = 0.5;
+  int right_occlusion_min_keypoints = 5;
 };
 
 template <typename Visit>
@@ -270,6 +277,9 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("pulled_nearer_min_depth_m", o.pulled_nearer_min_depth_m, 0.0, 10000.0);
   visit("pulled_nearer_max_px", o.pulled_nearer_max_px, 0.0, 1000.0);
   visit("pulled_nearer_occluder_class_ids", o.pulled_nearer_occluder_class_ids, 0, 65535);
+  visit("right_occlusion_check", o.right_occlusion_check, 0, 1);
+  visit("right_occlusion_margin_px", o.right_occlusion_margin_px, 0.0, 1000.0);
+  visit("right_occlusion_min_keypoints", o.right_occlusion_min_keypoints, 1, 1000000);
 }
 
 }  // namespace twistslam::tracking

@@ -85,7 +85,7 @@ TrackResult System::track(int index, double timestamp, const cv::Mat& left, cons
       throw std::invalid_argument("instances: expected int32 instance ids of the image size");
     if (labels.empty() || labels.size() == instances.size()) {
       object_mask = object_class_mask(instances, labels, vo.object_class_ids);
-      if (vo.extra_min_instance_keypoints > 0 || vo.pulled_nearer_check) {
+      if (vo.extra_min_instance_keypoints > 0 || vo.pulled_nearer_check || vo.right_occlusion_check) {
         // vehicles only (second pass, pulled-nearer check): a pedestrian's extra points seeded a
         // ghost (crowded seed 0, classical)
         vehicle_instances = instances_of_classes(instances, labels, vo.planar_class_ids);

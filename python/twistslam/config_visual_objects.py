@@ -540,3 +540,16 @@ class VisualObjectsConfig:
         "45-59 m behind a trunk was tracked 3-4 m short, a ghost, gone with these classes; over "
         "28 sequences a wash (DIS ghosts 2 -> 2: urban seed 5's far car beside a nearer "
         "building, which no class here covers, became a ghost again), cars and errors unchanged")
+    right_occlusion_check: bool = param(
+        True, "a vehicle keypoint the right camera cannot see loses its depth: one left of a "
+        "nearer vehicle's left edge by less than the two disparities' difference (the right "
+        "camera, 0.54 m to the right, looks at it past that edge). Its SAD match took whatever "
+        "looked alike: crowded seed 16's queued car 13, seen as a sliver past the car in front, "
+        "had stereo depths 0.4-1.6 m short (MEASURED)")
+    right_occlusion_margin_px: float = param(
+        0.5, "right_occlusion_check: the distance (level-0 px) a keypoint must be inside the "
+        "hidden strip (half a pixel: the rounding of the instance masks' columns)", "px",
+        lo=0.0, hi=1000.0)
+    right_occlusion_min_keypoints: int = param(
+        5, "right_occlusion_check: matched keypoints an instance needs for its disparity "
+        "(their median) to judge what it hides", "keypoints", lo=1, hi=1000000)
