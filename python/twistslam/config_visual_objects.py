@@ -541,15 +541,19 @@ class VisualObjectsConfig:
         "28 sequences a wash (DIS ghosts 2 -> 2: urban seed 5's far car beside a nearer "
         "building, which no class here covers, became a ghost again), cars and errors unchanged")
     right_occlusion_check: bool = param(
-        True, "a vehicle keypoint the right camera cannot see loses its depth: one left of a "
+        False, "a vehicle keypoint the right camera cannot see loses its depth: one left of a "
         "nearer vehicle's left edge by less than the two disparities' difference (the right "
-        "camera, 0.54 m to the right, looks at it past that edge). Its SAD match took whatever "
-        "looked alike: crowded seed 16's queued car 13, seen as a sliver past the car in front, "
-        "had stereo depths 0.4-1.6 m short (MEASURED)")
+        "camera, 0.54 m to the right, looks at it past that edge; its SAD match took whatever "
+        "looked alike). Off: on 41 sequences (files / DIS) it fixed queued cars (crowded s4's "
+        "car 77 RPE_r 0.67 -> 0.15 deg/m, crowded s7's car 12 aligned ATE 0.30 -> 0.07 m) but "
+        "a car wholly in the strip lost its stereo to worse cues: ghosts 3 / 2 -> 5 / 3, cars "
+        "192 / 193 -> 192 / 192 of 193 (crowded s3's car 16 with DIS 1.00 -> 0.41 of its "
+        "frames), docs/visual_objects.md")
     right_occlusion_margin_px: float = param(
         0.5, "right_occlusion_check: the distance (level-0 px) a keypoint must be inside the "
-        "hidden strip (half a pixel: the rounding of the instance masks' columns)", "px",
+        "hidden strip (half a pixel: the rounding of the instance masks' columns; not varied, "
+        "the check is off)", "px",
         lo=0.0, hi=1000.0)
     right_occlusion_min_keypoints: int = param(
         5, "right_occlusion_check: matched keypoints an instance needs for its disparity "
-        "(their median) to judge what it hides", "keypoints", lo=1, hi=1000000)
+        "(their median) to judge what it hides (not varied, the check is off)", "keypoints", lo=1, hi=1000000)

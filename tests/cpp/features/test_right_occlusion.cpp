@@ -47,23 +47,27 @@ TEST(RightOcclusion, DropsExactlyTheStripLeftOfANearerObject) {
   Scene s;
   s.fill(1, 100, 200);  // far car: disparity 10 px (38.9 m)
   s.fill(2, 200, 300);  // nearer car to its right: 30 px (13 m), hides 20 px of the far one
+  s.fill(4, 350, 390);  // a still nearer car farther right: the walks reach 39.5 px
   s.add_many(6, 110, 150, 10.0f);
   s.add_many(6, 210, 290, 30.0f);
+  s.add_many(6, 352, 388, 50.0f);
   const int deep = s.add(195.0f, 30.0f, 10.0f);     // 5 px from the edge: hidden
   const int inner = s.add(181.0f, 30.0f, 10.0f);    // 19 px: hidden (20 > 19 + 0.5)
-  const int border = s.add(179.6f, 30.0f, 10.0f);   // 20.4 px: within the margin, kept
+  const int margin = s.add(180.3f, 30.0f, 10.0f);   // 19.7 px: within the margin, kept
+  const int border = s.add(179.6f, 30.0f, 10.0f);   // 20.4 px: kept
   const int outside = s.add(170.0f, 30.0f, 10.0f);  // 30 px: the right camera sees it
   const int no_depth = s.add(196.0f, 31.0f, -1.0f);
   const RightOcclusionReport r = drop_matches_occluded_in_right(s.left, s.all, s.instances, 0.5f, 5, &s.matches);
-  EXPECT_EQ(r.num_instances, 2);
+  EXPECT_EQ(r.num_instances, 3);
   EXPECT_EQ(r.num_dropped, 2);
   EXPECT_FALSE(s.has_depth(deep));
   EXPECT_FALSE(s.has_depth(inner));
+  EXPECT_TRUE(s.has_depth(margin));
   EXPECT_TRUE(s.has_depth(border));
   EXPECT_TRUE(s.has_depth(outside));
   EXPECT_EQ(s.matches.u_right[deep], -1.0f);
   EXPECT_EQ(s.matches.depth[no_depth], -1.0f);
-  for (int i = 0; i < 12; ++i) EXPECT_TRUE(s.has_depth(i)) << i;  // the instances' own points
+  for (int i = 0; i < 18; ++i) EXPECT_TRUE(s.has_depth(i)) << i;  // the instances' own points
 }
 
 TEST(RightOcclusion, ANearerObjectToTheLeftOrAFartherOneHidesNothing) {
