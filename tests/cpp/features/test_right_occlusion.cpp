@@ -41,6 +41,17 @@ struct Scene {
   bool has_depth(int i) const { return matches.depth[i] > 0; }
 };
 
+// A far car (id 1, columns 100-199, six matches at 10 px) left of a nearer one (id 2, columns
+// 200-299, `near_matches` matches at 30 px), which hides the 20 px left of its edge.
+Scene far_beside_near(int near_matches) {
+  Scene s;
+  s.fill(1, 100, 200);
+  s.fill(2, 200, 300);
+  s.add_many(6, 110, 150, 10.0f);
+  s.add_many(near_matches, 210, 290, 30.0f);
+  return s;
+}
+
 }  // namespace
 
 TEST(RightOcclusion, DropsExactlyTheStripLeftOfANearerObject) {
@@ -105,11 +116,7 @@ TEST(RightOcclusion, AFartherObjectBetweenDoesNotShieldTheNearerEdge) {
 }
 
 TEST(RightOcclusion, AnInstanceWithTooFewMatchesJudgesNothing) {
-  Scene s;
-  s.fill(1, 100, 200);
-  s.fill(2, 200, 300);
-  s.add_many(6, 110, 150, 10.0f);
-  s.add_many(4, 210, 290, 30.0f);  // four matches: below min_keypoints 5
+  Scene s = far_beside_near(4);  // four matches: below min_keypoints 5
   const int near_edge = s.add(195.0f, 30.0f, 10.0f);
   RightOcclusionReport r = drop_matches_occluded_in_right(s.left, s.all, s.instances, 0.5f, 5, &s.matches);
   EXPECT_EQ(r.num_instances, 1);
@@ -121,11 +128,7 @@ TEST(RightOcclusion, AnInstanceWithTooFewMatchesJudgesNothing) {
 }
 
 TEST(RightOcclusion, TheMedianDisparityIgnoresAFewWrongMatches) {
-  Scene s;
-  s.fill(1, 100, 200);
-  s.fill(2, 200, 300);
-  s.add_many(6, 110, 150, 10.0f);
-  s.add_many(5, 210, 290, 30.0f);
+  Scene s = far_beside_near(5);
   s.add_many(2, 210, 290, 3.0f);  // two matches far too far on the nearer car
   const int hidden = s.add(185.0f, 30.0f, 10.0f);
   const RightOcclusionReport r = drop_matches_occluded_in_right(s.left, s.all, s.instances, 0.5f, 5, &s.matches);
@@ -134,11 +137,7 @@ TEST(RightOcclusion, TheMedianDisparityIgnoresAFewWrongMatches) {
 }
 
 TEST(RightOcclusion, OnlyTheKeypointsOfWhichAreJudgedAndCounted) {
-  Scene s;
-  s.fill(1, 100, 200);
-  s.fill(2, 200, 300);
-  s.add_many(6, 110, 150, 10.0f);
-  s.add_many(6, 210, 290, 30.0f);
+  Scene s = far_beside_near(6);
   const int hidden = s.add(195.0f, 30.0f, 10.0f);
   std::vector<int> which(s.all.begin(), s.all.end() - 1);  // all but the hidden one
   RightOcclusionReport r = drop_matches_occluded_in_right(s.left, which, s.instances, 0.5f, 5, &s.matches);
