@@ -26,4 +26,17 @@ bool level_made_up_turn(ObjectTrack* track, double max_deg_per_frame);
 // min_turn_radius_m <= 0).
 int bound_turn_by_travel(ObjectTrack* track, double min_turn_radius_m);
 
+// A car heads where its path goes: over a track, its heading turns as far as the direction of
+// its path does. The path's direction at each end is the chord over its first / last chord_m
+// of travel (reported rows, in the plane normal to up_w); the chords must not overlap. When
+// they point within max_path_turn_deg of each other (the car drove straight) while the rows'
+// rotation about up_w turned by at least min_excess_deg more than the path did, the turn is
+// made up: a far camera-only cluster seen side-on keeps its orientation towards the camera and
+// its frame turns with its bearing (urban s23's car 17: -51 deg while the bearing turned -48
+// and the car drove straight). Every row then takes the rotation of the middle reported row,
+// positions kept, and eq. 2's twists are recomputed. Returns whether it levelled (never with
+// chord_m <= 0, min_excess_deg <= 0 or a zero up_w).
+bool level_turn_off_its_path(ObjectTrack* track, const Vec3& up_w, double chord_m,
+                             double max_path_turn_deg, double min_excess_deg);
+
 }  // namespace twistslam::objects

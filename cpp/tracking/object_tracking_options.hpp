@@ -117,6 +117,13 @@ struct ObjectTrackingOptions {
   // a camera-only vehicle track's final rows turn at most (distance travelled) / this (m):
   // a car's turning radius (objects/track_turn.hpp; 0: off; config.py says why)
   double min_turn_radius_m = 5.0;
+  // ... and one whose rows turned at least path_turn_min_excess_deg more than its path did,
+  // while the chords over its first and last path_turn_chord_m of travel point within
+  // path_turn_max_straight_deg of each other, takes one rotation on every row
+  // (objects/track_turn.hpp, level_turn_off_its_path; excess 0: off; config.py says why)
+  double path_turn_chord_m = 5.0;
+  double path_turn_max_straight_deg = 15.0;
+  double path_turn_min_excess_deg = 20.0;
   // once the sequence ends, every track's rows, all observations of its points and its LiDAR
   // terms in one problem (tracking/object_smoothing.cpp); the online poses are kept beside
   bool final_smoothing = true;
@@ -247,6 +254,9 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("recenter_on_stereo_points", o.recenter_on_stereo_points, 0, 1);
   visit("recenter_min_stereo_fraction", o.recenter_min_stereo_fraction, 0.0, 1.0);
   visit("min_turn_radius_m", o.min_turn_radius_m, 0.0, 1000.0);
+  visit("path_turn_chord_m", o.path_turn_chord_m, 0.0, 1000.0);
+  visit("path_turn_max_straight_deg", o.path_turn_max_straight_deg, 0.0, 180.0);
+  visit("path_turn_min_excess_deg", o.path_turn_min_excess_deg, 0.0, 360.0);
   visit("final_smoothing", o.final_smoothing, 0, 1);
   visit("smoothing_iterations", o.smoothing_iterations, 1, 1000);
   visit("smoothing_frame_observations", o.smoothing_frame_observations, 0, 1000000);

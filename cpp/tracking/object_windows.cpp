@@ -332,9 +332,13 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
 
 void ObjectTracker::bound_camera_only_turns() {
   // last: the checks above project the points with the rows' rotations as the windows left them
-  for (objects::ObjectTrack& track : tracks_)
-    if (track.link == geometry::LinkType::kPlanar && !track.canonical)
-      objects::bound_turn_by_travel(&track, options_.min_turn_radius_m);
+  for (objects::ObjectTrack& track : tracks_) {
+    if (track.link != geometry::LinkType::kPlanar || track.canonical) continue;
+    objects::bound_turn_by_travel(&track, options_.min_turn_radius_m);
+    objects::level_turn_off_its_path(&track, up_w_, options_.path_turn_chord_m,
+                                     options_.path_turn_max_straight_deg,
+                                     options_.path_turn_min_excess_deg);
+  }
 }
 
 }  // namespace twistslam::tracking

@@ -378,6 +378,23 @@ class VisualObjectsConfig:
         "0.211 / 0.269 -> 0.251 deg/m, RPE_t and aligned ATE slightly lower, the same cars and "
         "ghosts, no car worse (3 m and 8 m, offline: 0.206 / 0.185 with the files)",
         "m", lo=0.0, hi=1000.0)
+    path_turn_chord_m: float = param(
+        5.0, "after the turn bound, a camera-only vehicle track's path direction at each end is "
+        "the chord over its first / last this much travel (reported rows; the chords may not "
+        "overlap, so a track needs twice this path): a car heads where its path goes, and a "
+        "far side-on cluster's frame that turns with its bearing while the car drives straight "
+        "(urban s23's car 17) is caught by comparing the two. 5 m: the chord's direction error "
+        "from a far track's depth scatter (~1 m at 45 m) stays near 10 deg", "m", lo=0.0, hi=1000.0)
+    path_turn_max_straight_deg: float = param(
+        15.0, "the two chords within this angle: the car drove straight (a turn at a junction "
+        "turns its path by 45-90 deg; the far turning cars of urban s24-s26 by 47-90 deg, their "
+        "chords by >= 10 deg or too short to compare)", "deg", lo=0.0, hi=180.0)
+    path_turn_min_excess_deg: float = param(
+        20.0, "... and its rows turned at least this much more than its path: every row takes "
+        "the middle reported row's rotation (0: off). 19 simulated sequences (urban 0-3 19 "
+        "23-28, crowded 0-3 15-18), files / DIS: only urban s23's car 17 levelled (its rows -51 "
+        "deg, its path +6 deg), RPE_r 3.95 -> 0.00 deg/m, means 0.175 -> 0.125 / 0.197 -> 0.148 "
+        "deg/m, cars and ghosts unchanged (docs/visual_objects.md)", "deg", lo=0.0, hi=360.0)
     recenter_min_stereo_fraction: float = param(
         0.2, "no re-centring while at most this fraction of the confirmed points were ever seen "
         "in stereo (0: off): the rest hold guessed depths (the ground contact, their few stereo "

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <tuple>
+#include <vector>
 
 #include "geometry/link_projection.hpp"
 #include "geometry/se3.hpp"
@@ -140,5 +142,99 @@ TEST(TrackTurn, ACarTurningOnItsRadiusOrTheSwitchedOffBoundLeaveTheRowsAlone) {
       EXPECT_EQ(track.frames[r].T_w_o, track0.frames[r].T_w_o);
       EXPECT_EQ(track.frames[r].xi, track0.frames[r].xi);
     }
+  }
+}
+
+namespace {
+// Reported rows at the given positions, the frame turned yaw_deg[r] about the road's normal.
+ObjectTrack rows_at(const std::vector<Vec3>& positions, const std::vector<double>& yaw_deg) {
+  ObjectTrack track;
+  track.link = geometry::LinkType::kPlanar;
+  track.Pi = geometry::projector_planar(kUp);
+  for (size_t r = 0; r < positions.size(); ++r) {
+    TrackFrame row;
+    row.frame = 33 + static_cast<int>(r);
+    row.reported = true;
+    row.T_w_o = geometry::make_pose(geometry::so3_exp(kUp * (yaw_deg[r] * M_PI / 180.0)), positions[r]);
+    track.frames.push_back(row);
+  }
+  for (size_t r = 0; r + 1 < positions.size(); ++r)
+    track.frames[r].xi = track.Pi * geometry::twist_between(track.frames[r].T_w_o, track.frames[r + 1].T_w_o);
+  return track;
+}
+
+// urban s23's car 17: 65 rows crossing at 0.2 m a frame (13 m) at 45 m with its far stereo's
+// depth jitter (+-0.4 m), its frame turning -0.8 deg a frame (-51 deg) with the bearing
+ObjectTrack side_on_spinning_car(double deg_per_frame) {
+  std::vector<Vec3> p;
+  std::vector<double> yaw;
+  for (int r = 0; r < 65; ++r) {
+    p.emplace_back(3.0 - 0.2 * r, 1.2, 45.0 + 0.4 * std::sin(0.7 * r));
+    yaw.push_back(-27.0 + deg_per_frame * r);
+  }
+  return rows_at(p, yaw);
+}
+}  // namespace
+
+TEST(TrackTurn, AFrameTurningOffAStraightPathTakesOneRotation) {
+  ObjectTrack track = side_on_spinning_car(-0.8);
+  const ObjectTrack before = track;
+  ASSERT_TRUE(level_turn_off_its_path(&track, kUp, 5.0, 15.0, 20.0));
+  const Mat3 R_mid = before.frames[32].T_w_o.topLeftCorner<3, 3>();  // the middle reported row
+  for (size_t r = 0; r < track.frames.size(); ++r) {
+    EXPECT_LT(angle_deg(track.frames[r].T_w_o.topLeftCorner<3, 3>(), R_mid), 1e-9) << "row " << r;
+    EXPECT_LT((track.frames[r].T_w_o.topRightCorner<3, 1>() - before.frames[r].T_w_o.topRightCorner<3, 1>()).norm(), 1e-12);
+  }
+  for (size_t r = 0; r + 1 < track.frames.size(); ++r) {  // eq. 2 links the levelled rows
+    const Mat4 next = geometry::se3_exp(track.frames[r].xi) * track.frames[r].T_w_o;
+    EXPECT_LT((next - track.frames[r + 1].T_w_o).norm(), 1e-9) << "row " << r;
+  }
+  // its predicted (unreported) rows take the rotation too, and do not count for the path
+  ObjectTrack with_gap = side_on_spinning_car(-0.8);
+  for (int r = 40; r < 45; ++r) {
+    with_gap.frames[r].reported = false;
+    with_gap.frames[r].T_w_o(0, 3) += 30.0;  // a prediction gone far: no path of the car's
+  }
+  ASSERT_TRUE(level_turn_off_its_path(&with_gap, kUp, 5.0, 15.0, 20.0));
+  const Mat3 R_mid_reported = before.frames[30].T_w_o.topLeftCorner<3, 3>();  // 30 of 60 reported
+  EXPECT_LT(angle_deg(with_gap.frames[42].T_w_o.topLeftCorner<3, 3>(), R_mid_reported), 1e-9);
+}
+
+TEST(TrackTurn, ATurnItsPathMadeASmallSpinOrTooShortAPathIsLeftAlone) {
+  // a right-angle turn on a 10 m circle: the path turns with the frame (p = c + R(a) (r, 0, 0))
+  std::vector<Vec3> p;
+  std::vector<double> yaw;
+  for (int r = 0; r <= 30; ++r) {
+    const double a = 0.5 * M_PI * r / 30;
+    p.push_back(Vec3(-6.0, 1.2, 30.0) + geometry::so3_exp(kUp * a) * Vec3(10.0, 0, 0));
+    yaw.push_back(a * 180.0 / M_PI);
+  }
+  const ObjectTrack turn = rows_at(p, yaw);
+  // a spin the path did not make, but 15 deg: under the excess
+  const ObjectTrack small = side_on_spinning_car(-15.0 / 64);
+  // the spinning car over 45 rows: 8.8 m of path, its 5 m chords overlap
+  ObjectTrack short_path = side_on_spinning_car(-0.8);
+  short_path.frames.resize(45);
+  // a bend of 12 deg between two straight stretches, the frame turning with it
+  std::vector<Vec3> bend_p;
+  std::vector<double> bend_yaw;
+  const Vec3 before_bend(-0.5, 0, 0), after_bend = geometry::so3_exp(kUp * (12.0 * M_PI / 180.0)) * before_bend;
+  Vec3 at(8.0, 1.2, 25.0);
+  for (int r = 0; r < 60; ++r) {
+    bend_p.push_back(at);
+    bend_yaw.push_back(r < 30 ? 0.0 : 12.0);
+    at += r < 30 ? before_bend : after_bend;
+  }
+  const ObjectTrack bend = rows_at(bend_p, bend_yaw);
+  for (const ObjectTrack& track0 : {turn, small, short_path, bend}) {
+    ObjectTrack track = track0;
+    EXPECT_FALSE(level_turn_off_its_path(&track, kUp, 5.0, 15.0, 20.0));
+    for (size_t r = 0; r < track.frames.size(); ++r) EXPECT_EQ(track.frames[r].T_w_o, track0.frames[r].T_w_o);
+  }
+  // the spinning car with the rule off, or no normal: untouched
+  for (const auto& [chord, excess, up] : {std::tuple{0.0, 20.0, kUp}, std::tuple{5.0, 0.0, kUp},
+                                          std::tuple{5.0, 20.0, Vec3(Vec3::Zero())}}) {
+    ObjectTrack track = side_on_spinning_car(-0.8);
+    EXPECT_FALSE(level_turn_off_its_path(&track, up, chord, 15.0, excess));
   }
 }
