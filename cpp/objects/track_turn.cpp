@@ -59,7 +59,7 @@ int bound_turn_by_travel(ObjectTrack* track, double min_turn_radius_m) {
 
 namespace {
 
-// The rows' positions projected onto the plane normal to up (unit).
+// v projected onto the plane normal to up (a unit vector).
 Vec3 in_plane(const Vec3& v, const Vec3& up) { return v - up * up.dot(v); }
 
 // Signed angle (rad) from a to b about up, both in the plane normal to up.
