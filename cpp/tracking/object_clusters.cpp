@@ -205,13 +205,35 @@ bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o,
   objects::ObjectCluster& cluster = clusters_[c];
   // A cluster without a velocity yet (it failed in its second frame) has no prediction worth
   // keeping: its origin moves to the new points' centroid, as a new cluster's would, and its
-  // one-frame-old points go. An older cluster keeps its points at the predicted pose: they
-  // hold its extent (the box until detections give sizes), and the unmatched ones are culled.
-  if (cluster.velocity.isZero() && !tracks_[c].canonical) {  // a canonical origin is its box's
+  // one-frame-old points go. Nor has one whose velocity is a single twist that then failed
+  // and whose new points lie away from where its old ones are predicted: a far car's first
+  // twist can take its birth points' depth error for motion (urban s28's parked car at 37 m:
+  // born 5.5 m deep, its first twist 3 m a frame towards the camera, and each re-seed at the
+  // prediction carried that on), so it is re-born too. An older cluster keeps its points at
+  // the predicted pose: they hold its extent (the box until detections give sizes), and the
+  // unmatched ones are culled.
+  objects::ObjectTrack& track = tracks_[c];
+  const bool has_velocity = !cluster.velocity.isZero();
+  bool reborn = !has_velocity;
+  // near, a stereo depth is good to centimetres and the twist with it; the medians of a near
+  // car's parts differ by metres where a view cuts it (real KITTI 0001's car 0 at 4-6 m,
+  // leaving the image: re-born, its rows ran 1 m off and it was lost)
+  const double depth = (frame.T_c_w * *T_w_o)(2, 3);
+  if (has_velocity && track.hits - 1 < options_.reseed_trusted_velocity_twists &&
+      depth >= options_.reseed_reborn_min_depth_m) {
+    std::vector<Vec3> old_w, new_w;
+    for (const auto& p : cluster.points) old_w.push_back(transform(*T_w_o, p.X_o));
+    for (const auto& f : kept) new_w.push_back(f.second);
+    reborn = old_w.empty() ||
+             (median_point(old_w) - median_point(new_w)).norm() > options_.reseed_reborn_min_offset_m;
+  }
+  if (reborn && !track.canonical) {  // a canonical origin is its box's
     // (seen in one or two frames, they are not retired for the final smoothing either)
     T_w_o->topRightCorner<3, 1>() = centroid;
     cluster.points.clear();
     cluster.retired.clear();
+    cluster.velocity.setZero();
+    track.hits = std::min(track.hits, 1);  // never tracked again: its re-seeds' reporting rules
   }
   const Mat4 T_o_w = geometry::se3_inverse(*T_w_o);
   for (const auto& [k, X_w] : kept) {

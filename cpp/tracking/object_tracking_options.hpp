@@ -79,6 +79,14 @@ struct ObjectTrackingOptions {
   // (0: no test): consecutive re-seeds of one car that jump farther place it on different
   // surfaces (config.py says why)
   double untracked_reseed_max_jump_m = 3.5;
+  // a re-seeded cluster whose velocity rests on fewer valid twists than this is re-born at its
+  // new points (origin, points, velocity and hits reset); 1: only one without any (config.py)
+  int reseed_trusted_velocity_twists = 2;
+  // ... when its new points' median lies farther than this from its old points' predicted
+  // median (m)
+  double reseed_reborn_min_offset_m = 2.0;
+  // ... and only when predicted at least this far (camera z, m)
+  double reseed_reborn_min_depth_m = 25.0;
   // tracks of these classes (people) report rows without a box of their own only this near (m)
   std::vector<int> small_object_class_ids{24, 25};
   double small_object_report_max_depth_m = 35;
@@ -229,6 +237,9 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("untracked_report_max_depth_m", o.untracked_report_max_depth_m, 0.0, 10000.0);
   visit("untracked_contact_report_max_depth_m", o.untracked_contact_report_max_depth_m, 0.0, 10000.0);
   visit("untracked_reseed_max_jump_m", o.untracked_reseed_max_jump_m, 0.0, 10000.0);
+  visit("reseed_trusted_velocity_twists", o.reseed_trusted_velocity_twists, 1, 100000);
+  visit("reseed_reborn_min_offset_m", o.reseed_reborn_min_offset_m, 0.0, 10000.0);
+  visit("reseed_reborn_min_depth_m", o.reseed_reborn_min_depth_m, 0.0, 10000.0);
   visit("small_object_class_ids", o.small_object_class_ids, 0, 65535);
   visit("small_object_report_max_depth_m", o.small_object_report_max_depth_m, 0.0, 10000.0);
   visit("max_point_spread_m", o.max_point_spread_m, 0.1, 1000.0);
