@@ -514,15 +514,7 @@ TEST_F(TrackerScene, AFarClusterWhoseOnlyTwistFailedIsRebornAtItsNewPoints) {
     options.reseed_trusted_velocity_twists = trusted_twists;
     options.reseed_reborn_min_depth_m = min_depth;
     auto tracker = make_tracker(options);
-    Car car = parked;
-    for (int i = 0; i < 6; ++i) {
-      if (i >= 2)
-        for (auto& d : car.descriptors) d = random_descriptor(rng);
-      SceneFrame f(i);
-      f.add_car(i == 0 ? born : car, i, 5);
-      f.add_background(background);
-      tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
-    }
+    run_car_losing_descriptors(tracker, born, parked, background, 6, 2, rng);
     return std::make_pair(std::move(tracker), parked.c0);
   };
   const double by_default = defaults.reseed_reborn_min_depth_m;
@@ -567,15 +559,7 @@ TEST_F(TrackerScene, AClusterWhoseOnlyTwistFailedKeepsItsPredictionWhereItsNewPo
   ASSERT_LT(options.reseed_reborn_min_offset_m, 4.0);
   ASSERT_LT(options.reseed_reborn_min_depth_m, 30.0);  // the rule applies at 30-34 m
   auto tracker = make_tracker(options);
-  Car car = car0;
-  for (int i = 0; i < 5; ++i) {
-    if (i >= 2)
-      for (auto& d : car.descriptors) d = random_descriptor(rng);
-    SceneFrame f(i);
-    f.add_car(car, i, 5);
-    f.add_background(background);
-    tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
-  }
+  run_car_losing_descriptors(tracker, car0, car0, background, 5, 2, rng);
   ASSERT_EQ(tracker.tracks().size(), 1u);
   const objects::ObjectTrack& track = tracker.tracks()[0];
   ASSERT_EQ(track.frames.size(), 5u);
@@ -584,7 +568,7 @@ TEST_F(TrackerScene, AClusterWhoseOnlyTwistFailedKeepsItsPredictionWhereItsNewPo
   EXPECT_EQ(track.hits, 2);                // not re-born
   EXPECT_NEAR(tracker.clusters()[0].velocity.head<3>().norm(), 1.0, 0.2);
   for (size_t r = 0; r < track.frames.size(); ++r)
-    EXPECT_LT((track.frames[r].T_w_o.topRightCorner<3, 1>() - car.pose(static_cast<int>(r)).topRightCorner<3, 1>()).norm(), 0.5)
+    EXPECT_LT((track.frames[r].T_w_o.topRightCorner<3, 1>() - car0.pose(static_cast<int>(r)).topRightCorner<3, 1>()).norm(), 0.5)
         << "row " << r;
 }
 

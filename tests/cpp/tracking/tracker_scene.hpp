@@ -279,4 +279,20 @@ void run_reseeding_car(tracking::ObjectTracker& tracker, Car car, const Backgrou
   }
 }
 
+// Frames 0..frames-1 of `car` (frame 0 of `born`: a car seen elsewhere at its birth), its
+// keypoints' descriptors new every frame from frame `found_frames` on (nothing found again:
+// the cluster re-seeds from its instance), one instance id throughout.
+void run_car_losing_descriptors(tracking::ObjectTracker& tracker, const Car& born, Car car,
+                                const Background& background, int frames, int found_frames,
+                                std::mt19937& rng) {
+  for (int i = 0; i < frames; ++i) {
+    if (i >= found_frames)
+      for (auto& d : car.descriptors) d = random_descriptor(rng);
+    SceneFrame f(i);
+    f.add_car(i == 0 ? born : car, i, 5);
+    f.add_background(background);
+    tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+  }
+}
+
 }  // namespace
