@@ -85,8 +85,8 @@ struct ObjectTrackingOptions {
   // ... when its new points' median lies farther than this from its old points' predicted
   // median (m)
   double reseed_reborn_min_offset_m = 2.0;
-  // ... and only when predicted at least this far (camera z, m)
-  double reseed_reborn_min_depth_m = 25.0;
+  // ... and only when predicted at least this far (camera z, m; config.py says why 15)
+  double reseed_reborn_min_depth_m = 15.0;
   // tracks of these classes (people) report rows without a box of their own only this near (m)
   std::vector<int> small_object_class_ids{24, 25};
   double small_object_report_max_depth_m = 35;
