@@ -35,6 +35,12 @@ const TrackFrame* ObjectTrack::at(int frame) const {
   return &frames[k];
 }
 
+int ObjectTrack::first_linked_row(double max_depth_m, int min_rows) const {
+  for (int r = static_cast<int>(frames.size()) - 1; r >= std::max(1, min_rows); --r)
+    if (frames[r].reborn && (frames[r].T_c_w * frames[r].T_w_o)(2, 3) < max_depth_m) return r;
+  return 0;
+}
+
 double ObjectTrack::mean_score() const {
   double sum = 0;
   int n = 0;

@@ -53,6 +53,9 @@ struct TrackFrame {
   // moves along it as an open end does (open_shift_m).
   Vec3 far_end_w = Vec3::Zero();
   bool reported = false;          // part of the output (set by the tracker's output policy)
+  // the cluster was re-born from this frame's stereo points (ObjectTracker::reseed): no point
+  // of it was seen in an earlier row
+  bool reborn = false;
   // not reported because the LiDAR saw through its box (tracking/object_free_space.cpp): the
   // returns around the box's rays then (camera frame), to take the test again with the final
   // pose; empty otherwise
@@ -126,6 +129,12 @@ struct ObjectTrack {
   int first_frame() const { return frames.empty() ? -1 : frames.front().frame; }
   // Frame row of dataset frame f, or nullptr.
   const TrackFrame* at(int frame) const;
+  // The first row a point of the cluster may link to its later rows: the last row re-born
+  // nearer than max_depth_m (camera z, m), else 0 (max_depth_m 0: always 0). Before it nothing
+  // but e_const links the rows to the cluster's points: a window over them would carry them
+  // back from the new points' motion.
+  // Only a re-birth with at least min_rows rows before it counts.
+  int first_linked_row(double max_depth_m, int min_rows = 1) const;
   // Mean score of the associated detections (0 without any).
   double mean_score() const;
   // Track confidence: mean range-corrected score of the associated detections (0 without any).

@@ -194,7 +194,7 @@ void ObjectTracker::add_points(int c, const Frame& frame, int instance) {
 }
 
 bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o,
-                           bool* contact_seeded) {
+                           bool* contact_seeded, bool* reborn_out) {
   std::vector<std::pair<int, Vec3>> kept;
   Vec3 centroid;
   const bool vehicle = tracks_[c].link == geometry::LinkType::kPlanar;
@@ -227,6 +227,7 @@ bool ObjectTracker::reseed(int c, const Frame& frame, int instance, Mat4* T_w_o,
     reborn = old_w.empty() ||
              (median_point(old_w) - median_point(new_w)).norm() > options_.reseed_reborn_min_offset_m;
   }
+  if (reborn_out) *reborn_out = reborn && !track.canonical;
   if (reborn && !track.canonical) {  // a canonical origin is its box's
     // (seen in one or two frames, they are not retired for the final smoothing either)
     T_w_o->topRightCorner<3, 1>() = centroid;

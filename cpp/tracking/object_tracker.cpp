@@ -99,10 +99,10 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
   // box is its own (a new cluster started on it would duplicate the object)
   const bool box_kept = !valid && detection >= 0 && track.canonical;
   if (box_kept && reseed_instance < 0) reseed_instance = free_instance_under(detections_[detection].box);
-  bool contact_seeded = false;
+  bool contact_seeded = false, reborn = false;
   const bool reseeded = !valid && reseed_instance >= 0 && options_.reseed_after_misses > 0 &&
                         track.misses + 1 >= options_.reseed_after_misses &&
-                        reseed(c, frame, reseed_instance, &T_w_o_reseed, &contact_seeded);
+                        reseed(c, frame, reseed_instance, &T_w_o_reseed, &contact_seeded, &reborn);
   if (reseeded && reseed_instance != instance) {
     assigned_instances_.insert(reseed_instance);
     instance = reseed_instance;
@@ -115,6 +115,7 @@ bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match>
     track.last().xi = track.Pi * geometry::twist_between(T_w_o_prev, T_w_o_reseed);
     track.misses = 0;
     row.detected = false;
+    row.reborn = reborn;
   } else if (valid) {
     row.T_w_o = est.T_w_o;
     track.last().xi = est.xi;  // eq. 2: T_w_o(i+1) = exp(Pi xi_i) T_w_o(i)

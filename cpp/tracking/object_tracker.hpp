@@ -314,7 +314,8 @@ class ObjectTracker : public ObjectBundleTerms {
   // prediction; a cluster without velocity moves to their centroid and drops its old points).
   // False when the instance has too few points. *contact_seeded (when given): the ground
   // contact placed some of them.
-  bool reseed(int c, const Frame& frame, int instance, Mat4* T_w_o, bool* contact_seeded = nullptr);
+  bool reseed(int c, const Frame& frame, int instance, Mat4* T_w_o, bool* contact_seeded = nullptr,
+              bool* reborn = nullptr);
   void cull(objects::ObjectCluster& cluster) const;
   // e_dyna + e_const (+ e_head) over the cluster's last window_frames frames (eq. 9), camera
   // fixed.

@@ -87,6 +87,11 @@ struct ObjectTrackingOptions {
   double reseed_reborn_min_offset_m = 2.0;
   // ... and only when predicted at least this far (camera z, m; config.py says why 15)
   double reseed_reborn_min_depth_m = 15.0;
+  // rows before a re-birth whose row lies nearer than this (camera z, m), when there are at
+  // least reborn_barrier_min_rows of them, stay out of the windows, the final smoothing and the
+  // keyframe BA (0: none do): nothing but e_const links them to the new points
+  double reborn_barrier_max_depth_m = 25.0;
+  int reborn_barrier_min_rows = 3;
   // tracks of these classes (people) report rows without a box of their own only this near (m)
   std::vector<int> small_object_class_ids{24, 25};
   double small_object_report_max_depth_m = 35;
@@ -240,6 +245,8 @@ void for_each_option(ObjectTrackingOptions& o, Visit&& visit) {
   visit("reseed_trusted_velocity_twists", o.reseed_trusted_velocity_twists, 1, 100000);
   visit("reseed_reborn_min_offset_m", o.reseed_reborn_min_offset_m, 0.0, 10000.0);
   visit("reseed_reborn_min_depth_m", o.reseed_reborn_min_depth_m, 0.0, 10000.0);
+  visit("reborn_barrier_max_depth_m", o.reborn_barrier_max_depth_m, 0.0, 10000.0);
+  visit("reborn_barrier_min_rows", o.reborn_barrier_min_rows, 1, 100000);
   visit("small_object_class_ids", o.small_object_class_ids, 0, 65535);
   visit("small_object_report_max_depth_m", o.small_object_report_max_depth_m, 0.0, 10000.0);
   visit("max_point_spread_m", o.max_point_spread_m, 0.1, 1000.0);

@@ -239,9 +239,11 @@ void ObjectTracker::refine_window(int c) {
                            boxes >= kMinBoxesForFreeGauge && num_rows <= kMaxBirthWindowRows &&
                            birth_off_boxes_m(track) > kBirthOffBoxesM;
   if (track.canonical && boxes >= kMinBoxesForFreeGauge) track.birth_placed = true;
-  const int rows = place_birth ? num_rows : std::min<int>(options_.window_frames, num_rows);
+  const int first = std::max(place_birth ? 0 : num_rows - std::min<int>(options_.window_frames, num_rows),
+                             track.first_linked_row(options_.reborn_barrier_max_depth_m,
+                                             options_.reborn_barrier_min_rows));
+  const int rows = num_rows - first;
   if (rows < 3) return;
-  const int first = num_rows - rows;
   optim::VisualObjectWindow w;
   std::vector<int> used;
   if (!build_window(c, first, rows, T_c_w_of_frame_, false, &w, &used)) return;
@@ -261,17 +263,21 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
   }
   for (int c = 0; c < static_cast<int>(tracks_.size()); ++c) {
     objects::ObjectTrack& track = tracks_[c];
-    const int rows = static_cast<int>(track.frames.size());
-    if (rows < 3 || !track.ever_confirmed() || !track.T_w_o_online.empty()) continue;
+    const int num_rows = static_cast<int>(track.frames.size());
+    if (num_rows < 3 || !track.ever_confirmed() || !track.T_w_o_online.empty()) continue;
     // a cluster never tracked (no valid twist since its birth: hits < 2) and without boxes
     // has no point seen in two frames, each row is one frame's stereo (its re-seeds): nothing
     // links the rows but e_const, which extrapolated them from the last re-seed's points.
     // Urban seed 4's track 41, a far car: its reported rows 0.3-2.5 m from the car online,
     // 1.6-3.7 m smoothed (a ghost)
     if (track.hits < 2 && count_boxes(track) == 0) continue;
+    const int first = track.first_linked_row(options_.reborn_barrier_max_depth_m,
+                                             options_.reborn_barrier_min_rows);
+    const int rows = num_rows - first;
+    if (rows < 3) continue;
     optim::VisualObjectWindow w;
     std::vector<int> used;
-    if (!build_window(c, 0, rows, T_c_w_of_frame, true, &w, &used)) continue;
+    if (!build_window(c, first, rows, T_c_w_of_frame, true, &w, &used)) continue;
     // the gauge: the boxes' pose priors where they frame the object (as the birth placement),
     // else one row held fixed (a cluster's frame is one of its poses; the points follow it)
     const bool boxes_hold = track.canonical && lidar_options_.use_detection_pose &&
@@ -304,17 +310,17 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
     if (!track.canonical && options_.smoothing_max_median_move_m > 0) {
       std::vector<double> moves_m;
       for (int r = 0; r < rows; ++r)
-        if (track.frames[r].reported)
-          moves_m.push_back((w.T_w_o[r].topRightCorner<3, 1>() - track.frames[r].T_w_o.topRightCorner<3, 1>()).norm());
+        if (track.frames[first + r].reported)
+          moves_m.push_back((w.T_w_o[r].topRightCorner<3, 1>() - track.frames[first + r].T_w_o.topRightCorner<3, 1>()).norm());
       if (!moves_m.empty() && detail::median_value(moves_m) > options_.smoothing_max_median_move_m) {
         ++report.num_rejected;
         continue;
       }
     }
     std::vector<Mat4> online;
-    online.reserve(rows);
+    online.reserve(num_rows);
     for (const objects::TrackFrame& row : track.frames) online.push_back(row.T_w_o);
-    if (!take_window(c, 0, w, used)) {
+    if (!take_window(c, first, w, used)) {
       ++report.num_rejected;
       continue;
     }

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -213,6 +214,66 @@ TEST_F(ReseedScene, ANearCarTheImageCutsKeepsItsPredictionWhenItsOnlyTwistFailed
       EXPECT_EQ(track.hits, 1) << "re-born";
       EXPECT_GT(off, 1.5);
     }
+  }
+}
+
+// reborn_barrier_max_depth_m: a parked car at 18 m whose keypoints are new every frame, so that
+// each frame re-seeds (re-births) its cluster on it; in frame 5 its re-seed lands `shift_m`
+// nearer (its stereo points on another surface), and from then on its keypoints are found
+// again, so that the next twists step back onto the car. No point links rows 0-4 to the later
+// ones: with the barrier (the re-birth at 16 m, nearer than 25 m, with 5 rows before it) they
+// stay on the car where their re-seeds put them; without it, or when the barrier asks for more
+// rows before a re-birth than there are, the window's e_const carries them off with that step.
+TEST_F(ReseedScene, RowsBeforeANearRebirthStayOutOfTheWindows) {
+  constexpr double kShiftM = 2.0;
+  auto run = [&](double barrier_m, int min_rows) {
+    tracking::ObjectTrackingOptions options;
+    options.reborn_barrier_max_depth_m = barrier_m;
+    options.reborn_barrier_min_rows = min_rows;
+    auto tracker = make_tracker(options);
+    Car car = make_car(rng, Vec3(1.0, 0.9, 18), Vec3::Zero(), 0.0, 60);
+    for (int i = 0; i < 9; ++i) {
+      if (i <= 5)
+        for (auto& d : car.descriptors) d = random_descriptor(rng);
+      Car seen = car;
+      if (i == 5) seen.c0.z() -= kShiftM;
+      SceneFrame f(i);
+      f.add_car(seen, i, 5);
+      f.add_background(background);
+      tracker.track(f.finish(), f.instances, cv::Mat(), kUp);
+    }
+    return std::make_pair(std::move(tracker), car.c0);
+  };
+  const tracking::ObjectTrackingOptions defaults;
+  ASSERT_GT(defaults.reborn_barrier_max_depth_m, 18.0);
+  ASSERT_LE(defaults.reborn_barrier_min_rows, 5);
+  auto worst_of_rows_1_to_4 = [](const objects::ObjectTrack& track, const Vec3& c0) {
+    double worst = 0;
+    for (int r = 1; r < 5; ++r)
+      worst = std::max(worst, (track.frames[r].T_w_o.topRightCorner<3, 1>() - c0).norm());
+    return worst;
+  };
+  for (const auto& [barrier_m, min_rows] :
+       {std::pair{defaults.reborn_barrier_max_depth_m, defaults.reborn_barrier_min_rows},
+        {0.0, defaults.reborn_barrier_min_rows}, {defaults.reborn_barrier_max_depth_m, 6}}) {
+    auto [tracker, c0] = run(barrier_m, min_rows);
+    ASSERT_EQ(tracker.tracks().size(), 1u) << barrier_m;
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    ASSERT_EQ(track.frames.size(), 9u);
+    for (int r = 1; r < 6; ++r) EXPECT_TRUE(track.frames[r].reborn) << "row " << r;
+    EXPECT_GE(track.hits, 3) << "tracked again after the re-birth";
+    const bool barrier = barrier_m > 0 && min_rows <= 5;
+    EXPECT_EQ(track.first_linked_row(barrier_m, min_rows), barrier ? 5 : 0);
+    if (!barrier) {
+      EXPECT_GT(worst_of_rows_1_to_4(track, c0), 1.0);  // carried off (9 m here)
+      continue;
+    }
+    EXPECT_LT(worst_of_rows_1_to_4(track, c0), 0.3);
+    // the final smoothing leaves them too (the camera stands at the origin throughout)
+    std::map<int, Mat4> cameras;
+    for (int i = 0; i < 9; ++i) cameras[i] = Mat4::Identity();
+    tracker.smooth_tracks(cameras);
+    EXPECT_LT(worst_of_rows_1_to_4(tracker.tracks()[0], c0), 0.3);
   }
 }
 
