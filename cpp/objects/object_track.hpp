@@ -130,10 +130,9 @@ struct ObjectTrack {
   // Frame row of dataset frame f, or nullptr.
   const TrackFrame* at(int frame) const;
   // The first row a point of the cluster may link to its later rows: the last row re-born
-  // nearer than max_depth_m (camera z, m), else 0 (max_depth_m 0: always 0). Before it nothing
-  // but e_const links the rows to the cluster's points: a window over them would carry them
-  // back from the new points' motion.
-  // Only a re-birth with at least min_rows rows before it counts.
+  // nearer than max_depth_m (camera z, m) with at least min_rows rows before it, else 0
+  // (max_depth_m 0: always 0). Before it nothing but e_const links the rows to the cluster's
+  // points: a window over them would carry them back from the new points' motion.
   int first_linked_row(double max_depth_m, int min_rows = 1) const;
   // Mean score of the associated detections (0 without any).
   double mean_score() const;

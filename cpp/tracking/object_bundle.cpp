@@ -37,9 +37,9 @@ void ObjectTracker::add_bundle_terms(const std::map<int, int>& slot_of_frame, in
     object.Pi = track.Pi;
     std::map<int, int> pose_of_frame;  // frame -> object pose index
     // the rows before a near re-birth share no point with the later ones (as in the windows)
-    for (int r = track.first_linked_row(options_.reborn_barrier_max_depth_m,
-                                             options_.reborn_barrier_min_rows);
-         r < static_cast<int>(track.frames.size()); ++r) {
+    const int first =
+        track.first_linked_row(options_.reborn_barrier_max_depth_m, options_.reborn_barrier_min_rows);
+    for (int r = first; r < static_cast<int>(track.frames.size()); ++r) {
       const objects::TrackFrame& row = track.frames[r];
       const auto slot = slot_of_frame.find(row.frame);
       if (slot == slot_of_frame.end() || !row.reported) continue;

@@ -313,7 +313,7 @@ class ObjectTracker : public ObjectBundleTerms {
   // The free stereo points of `instance` join the cluster, placed with *T_w_o (the
   // prediction; a cluster without velocity moves to their centroid and drops its old points).
   // False when the instance has too few points. *contact_seeded (when given): the ground
-  // contact placed some of them.
+  // contact placed some of them; *reborn (when given): the cluster was re-born at them.
   bool reseed(int c, const Frame& frame, int instance, Mat4* T_w_o, bool* contact_seeded = nullptr,
               bool* reborn = nullptr);
   void cull(objects::ObjectCluster& cluster) const;

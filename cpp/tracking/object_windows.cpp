@@ -239,9 +239,10 @@ void ObjectTracker::refine_window(int c) {
                            boxes >= kMinBoxesForFreeGauge && num_rows <= kMaxBirthWindowRows &&
                            birth_off_boxes_m(track) > kBirthOffBoxesM;
   if (track.canonical && boxes >= kMinBoxesForFreeGauge) track.birth_placed = true;
-  const int first = std::max(place_birth ? 0 : num_rows - std::min<int>(options_.window_frames, num_rows),
-                             track.first_linked_row(options_.reborn_barrier_max_depth_m,
-                                             options_.reborn_barrier_min_rows));
+  const int barrier =
+      track.first_linked_row(options_.reborn_barrier_max_depth_m, options_.reborn_barrier_min_rows);
+  const int first =
+      std::max(place_birth ? 0 : num_rows - std::min<int>(options_.window_frames, num_rows), barrier);
   const int rows = num_rows - first;
   if (rows < 3) return;
   optim::VisualObjectWindow w;
@@ -271,8 +272,8 @@ ObjectSmoothingReport ObjectTracker::smooth_tracks(const std::map<int, Mat4>& T_
     // Urban seed 4's track 41, a far car: its reported rows 0.3-2.5 m from the car online,
     // 1.6-3.7 m smoothed (a ghost)
     if (track.hits < 2 && count_boxes(track) == 0) continue;
-    const int first = track.first_linked_row(options_.reborn_barrier_max_depth_m,
-                                             options_.reborn_barrier_min_rows);
+    const int first =
+        track.first_linked_row(options_.reborn_barrier_max_depth_m, options_.reborn_barrier_min_rows);
     const int rows = num_rows - first;
     if (rows < 3) continue;
     optim::VisualObjectWindow w;
