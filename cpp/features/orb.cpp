@@ -162,6 +162,40 @@ std::vector<cv::KeyPoint> oriented_keypoints(const cv::Mat& img,
   return chosen;
 }
 
+// Extra level pixels around a level's keypoints kept when describing them: the rotated
+// 31x31 BRIEF pattern reaches ~19 px from its centre (kEdgeBorder), so 32 px keep every
+// tested pixel inside the crop, where cv::ORB::compute smooths it.
+constexpr int kDescriptorCropMargin = 32;
+
+// Rotated BRIEF descriptors of `keypoints` (level coordinates) by cv::ORB::compute on the
+// part of the level around them. compute() pads and smooths (7x7 Gaussian) all of the image
+// it is given, which for the few keypoints of an object mask cost more than the descriptors;
+// a crop gives the same bits: OpenCV pads a crop with its parent image's own pixels (the
+// image's edges, where they lie inside the padding, as for the whole image) and its 8-bit
+// Gaussian is bit-exact, so every pixel the pattern reads is smoothed as in the whole level
+// (tests/cpp/features/test_orb.cpp checks the descriptors against the whole-level ones).
+cv::Mat describe(const cv::Ptr<cv::ORB>& brief, const cv::Mat& img,
+                 const std::vector<cv::KeyPoint>& keypoints) {
+  float x0 = keypoints.front().pt.x, x1 = x0, y0 = keypoints.front().pt.y, y1 = y0;
+  for (const cv::KeyPoint& k : keypoints) {
+    x0 = std::min(x0, k.pt.x), x1 = std::max(x1, k.pt.x);
+    y0 = std::min(y0, k.pt.y), y1 = std::max(y1, k.pt.y);
+  }
+  // even offsets: a shifted coordinate rounds (half to even, cvRound) as the unshifted one
+  const int left = std::max(0, static_cast<int>(std::floor(x0)) - kDescriptorCropMargin) & ~1;
+  const int top = std::max(0, static_cast<int>(std::floor(y0)) - kDescriptorCropMargin) & ~1;
+  const int right = std::min(img.cols, static_cast<int>(std::ceil(x1)) + kDescriptorCropMargin + 1);
+  const int bottom = std::min(img.rows, static_cast<int>(std::ceil(y1)) + kDescriptorCropMargin + 1);
+  const cv::Rect crop(left, top, right - left, bottom - top);
+  std::vector<cv::KeyPoint> local = keypoints;
+  for (cv::KeyPoint& k : local) k.pt -= cv::Point2f(static_cast<float>(left), static_cast<float>(top));
+  cv::Mat desc;
+  brief->compute(img(crop), local, desc);  // drops nothing: every keypoint is >= 19 px inside
+  if (desc.rows != static_cast<int>(keypoints.size()))
+    throw std::logic_error("OrbExtractor: descriptor count differs from keypoint count");
+  return desc;
+}
+
 }  // namespace
 
 void check_options(const OrbOptions& o) {
@@ -230,14 +264,41 @@ Keypoints OrbExtractor::extract(const cv::Mat& gray, const cv::Mat& mask) const 
   if (gray.empty()) throw std::invalid_argument("OrbExtractor::extract: empty image");
   if (gray.type() != CV_8UC1)
     throw std::invalid_argument("OrbExtractor::extract: expected a CV_8UC1 image (see to_gray)");
-  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != gray.size()))
+  return extract_levels(build_pyramid(gray, options_.scale_factor, options_.num_levels), mask);
+}
+
+Keypoints OrbExtractor::extract_on_pyramid(const std::vector<cv::Mat>& pyramid,
+                                           const cv::Mat& mask) const {
+  if (pyramid.empty() || pyramid[0].empty())
+    throw std::invalid_argument("OrbExtractor::extract_on_pyramid: empty pyramid");
+  if (pyramid[0].type() != CV_8UC1)
+    throw std::invalid_argument("OrbExtractor::extract_on_pyramid: expected CV_8UC1 levels");
+  // the levels build_pyramid makes of this image with this extractor's options
+  const cv::Mat& gray = pyramid[0];
+  int levels = 1;
+  for (int l = 1; l < options_.num_levels; ++l, ++levels) {
+    const double s = std::pow(static_cast<double>(options_.scale_factor), l);
+    const cv::Size size(cvRound(gray.cols / s), cvRound(gray.rows / s));
+    if (size.width <= 2 * kEdgeBorder || size.height <= 2 * kEdgeBorder) break;
+    if (l >= static_cast<int>(pyramid.size()) || pyramid[l].size() != size ||
+        pyramid[l].type() != CV_8UC1)
+      throw std::invalid_argument(
+          "OrbExtractor::extract_on_pyramid: level " + std::to_string(l) +
+          " is missing or not the level of scale_factor " + std::to_string(options_.scale_factor));
+  }
+  return extract_levels(std::vector<cv::Mat>(pyramid.begin(), pyramid.begin() + levels), mask);
+}
+
+Keypoints OrbExtractor::extract_levels(std::vector<cv::Mat> pyramid, const cv::Mat& mask) const {
+  const cv::Size size0 = pyramid[0].size();
+  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != size0))
     throw std::invalid_argument("OrbExtractor::extract: mask must be CV_8UC1 of the image size");
 
   // the mask's non-zero pixels lie in this box (level 0); an all-zero mask gives an empty box
-  const cv::Rect mask_box = mask.empty() ? cv::Rect(0, 0, gray.cols, gray.rows) : cv::boundingRect(mask);
+  const cv::Rect mask_box = mask.empty() ? cv::Rect(cv::Point(0, 0), size0) : cv::boundingRect(mask);
   Keypoints out;
   out.scale_factor = options_.scale_factor;
-  out.pyramid = build_pyramid(gray, options_.scale_factor, options_.num_levels);
+  out.pyramid = std::move(pyramid);
   if (options_.num_features == 0) {
     out.descriptors.create(0, kDescriptorBytes, CV_8U);
     return out;
@@ -257,7 +318,7 @@ Keypoints OrbExtractor::extract(const cv::Mat& gray, const cv::Mat& mask) const 
     const int wanted = per_level_[l] + carry;
     carry = wanted;
     if (wanted <= 0) continue;
-    const LevelArea area(img, gray.size(), mask, mask_box);
+    const LevelArea area(img, size0, mask, mask_box);
     if (area.region.width <= 0 || area.region.height <= 0) continue;
 
     detect_corners(img, area, options_.fast_threshold, &candidates);
@@ -266,10 +327,7 @@ Keypoints OrbExtractor::extract(const cv::Mat& gray, const cv::Mat& mask) const 
         img, candidates, detail::distribute_keypoints(candidates, cv::Rect2f(area.region), wanted),
         circle_half_width_);
     if (chosen.empty()) continue;
-    cv::Mat desc;
-    brief->compute(img, chosen, desc);  // drops nothing: every keypoint is >= 19 px inside
-    if (desc.rows != static_cast<int>(chosen.size()))
-      throw std::logic_error("OrbExtractor: descriptor count differs from keypoint count");
+    const cv::Mat desc = describe(brief, img, chosen);
     carry = wanted - static_cast<int>(chosen.size());
 
     for (cv::KeyPoint k : chosen) {

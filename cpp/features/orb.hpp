@@ -114,6 +114,12 @@ class OrbExtractor {
   // shared state): the left and right images may be processed concurrently.
   // Throws std::invalid_argument on an empty or non-CV_8UC1 image or a mismatched mask.
   Keypoints extract(const cv::Mat& gray, const cv::Mat& mask = {}) const;
+  // The same on a pyramid of the image already built (build_pyramid with this extractor's
+  // scale_factor, e.g. another extractor's Keypoints::pyramid of the same image): its first
+  // num_levels levels are shared, not rebuilt, and the result is identical to extract() on
+  // its level 0. Throws std::invalid_argument for an empty pyramid or a level that is missing
+  // or not of this scale_factor's size.
+  Keypoints extract_on_pyramid(const std::vector<cv::Mat>& pyramid, const cv::Mat& mask = {}) const;
 
   const OrbOptions& options() const { return options_; }
   // s^l, 1 / s^l, s^(2l) (variance of a level-l keypoint position in level-0 px^2), inverse.
@@ -125,6 +131,8 @@ class OrbExtractor {
   const std::vector<int>& features_per_level() const { return per_level_; }
 
  private:
+  Keypoints extract_levels(std::vector<cv::Mat> pyramid, const cv::Mat& mask) const;
+
   OrbOptions options_;
   std::vector<float> scale_, inv_scale_, sigma2_, inv_sigma2_;
   std::vector<int> per_level_;

@@ -206,7 +206,15 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
       rows.push_back(extra.descriptors.row(j));
     }
   };
-  const features::Keypoints extra = extractor_.extract(gray_left, object_mask);
+  // the main pass's pyramid of this very image (its level 0 shares the pixels) when it kept
+  // it: the same levels, not rebuilt
+  const bool own_pyramid = !left.pyramid.empty() && left.pyramid[0].data == gray_left.data &&
+                           left.pyramid[0].size() == gray_left.size();
+  const auto extract = [&](const features::OrbExtractor& extractor, const cv::Mat& mask) {
+    return own_pyramid ? extractor.extract_on_pyramid(left.pyramid, mask)
+                       : extractor.extract(gray_left, mask);
+  };
+  const features::Keypoints extra = extract(extractor_, object_mask);
   append(extra);
   if (!instances.empty() && min_instance_keypoints_ > 0) {
     // the pass's budget is spread over the masks' area, so near cars take most of it; a
@@ -218,7 +226,7 @@ ObjectKeypointReport ObjectKeypointExtractor::extract(const cv::Mat& gray_left,
     if (report.num_deprived > 0) {
       features::OrbOptions o = extractor_.options();
       o.num_features = std::min(report.num_deprived * min_instance_keypoints_, 100000);
-      append(features::OrbExtractor(o).extract(gray_left, deprived));
+      append(extract(features::OrbExtractor(o), deprived));
     }
   }
   report.num_added = static_cast<int>(rows.size());

@@ -159,6 +159,66 @@ TEST(OrbExtractor, AMasksBoundingBoxLimitsTheSearchNotTheResult) {
   EXPECT_TRUE(extractor.extract(img, cv::Mat::zeros(img.size(), CV_8U)).keypoints.empty());
 }
 
+// The descriptors are computed on a crop of each level around its keypoints (orb.cpp,
+// describe): they must equal OpenCV's rotated BRIEF on the whole level, also for keypoints a
+// few pixels from the crop's edges and for a mask touching the image's border.
+TEST(OrbExtractor, DescriptorsOfAMaskedAreaEqualThoseOfTheWholeImage) {
+  const cv::Mat img = test::to_u8(test::random_texture(1242, 375, 13));
+  cv::Mat mask(img.size(), CV_8U, cv::Scalar(0));
+  cv::rectangle(mask, cv::Rect(500, 140, 90, 70), cv::Scalar(255), cv::FILLED);  // inside
+  cv::rectangle(mask, cv::Rect(0, 250, 120, 125), cv::Scalar(255), cv::FILLED);  // a corner
+  OrbOptions o;
+  o.num_features = 400;
+  o.fast_threshold = 7;
+  o.cell_size = 10;
+  o.num_levels = 1;  // level 0 only: the keypoints' coordinates are the level's
+  const Keypoints k = OrbExtractor(o).extract(img, mask);
+  ASSERT_GT(k.size(), 150u);
+  std::vector<cv::KeyPoint> whole = k.keypoints;
+  cv::Mat reference;
+  cv::ORB::create(o.num_features, o.scale_factor, 1, kEdgeBorder, 0, 2, cv::ORB::FAST_SCORE,
+                  kPatchSize, o.fast_threshold)
+      ->compute(img, whole, reference);
+  ASSERT_EQ(whole.size(), k.size());
+  for (std::size_t i = 0; i < k.size(); ++i)
+    ASSERT_EQ(descriptor_distance(k.descriptors.row(static_cast<int>(i)), reference.row(static_cast<int>(i))), 0)
+        << "keypoint " << i << " at " << k.keypoints[i].pt;
+}
+
+// An extractor on another one's pyramid of the same image (what the object keypoints do on
+// the main pass's) finds what it finds on the image; a pyramid of another scale is refused.
+TEST(OrbExtractor, ExtractOnAKeptPyramidEqualsExtract) {
+  const cv::Mat img = test::to_u8(test::random_texture(1242, 375, 17));
+  cv::Mat mask(img.size(), CV_8U, cv::Scalar(0));
+  cv::circle(mask, cv::Point(800, 190), 90, cv::Scalar(255), cv::FILLED);
+  const Keypoints main = OrbExtractor(OrbOptions{}).extract(img);
+  ASSERT_EQ(main.pyramid.size(), 4u);
+  OrbOptions o;
+  o.num_features = 300;
+  o.num_levels = 2;
+  const OrbExtractor objects(o);
+  const Keypoints a = objects.extract(img, mask), b = objects.extract_on_pyramid(main.pyramid, mask);
+  ASSERT_GT(a.size(), 100u);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a.keypoints[i].pt, b.keypoints[i].pt) << i;
+    ASSERT_EQ(a.keypoints[i].octave, b.keypoints[i].octave) << i;
+  }
+  EXPECT_EQ(cv::norm(a.descriptors, b.descriptors, cv::NORM_HAMMING), 0.0);
+  EXPECT_EQ(b.pyramid.size(), 2u);
+  EXPECT_EQ(b.pyramid[1].data, main.pyramid[1].data) << "the levels are shared, not rebuilt";
+
+  OrbOptions other = o;
+  other.scale_factor = 1.5f;
+  try {
+    OrbExtractor(other).extract_on_pyramid(main.pyramid, mask);
+    FAIL() << "a pyramid of scale 1.2 taken for 1.5";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("level 1"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(objects.extract_on_pyramid({}, mask), std::invalid_argument);
+}
+
 TEST(OrbExtractor, OrientationAndDescriptorFollowARotation) {
   // A 90-degree rotation is an exact pixel permutation: each keypoint must reappear at the
   // rotated position with its angle turned by 90 degrees and a nearly equal descriptor.
