@@ -96,10 +96,12 @@ FieldTable pose_option_fields(o::PoseOptimizationOptions& opt) {
 
 o::BALinearSolver linear_solver_from_string(const std::string& s) {
   if (s == "auto") return o::BALinearSolver::kAuto;
+  if (s == "builtin_dense_schur") return o::BALinearSolver::kBuiltinDenseSchur;
   if (s == "dense_schur") return o::BALinearSolver::kDenseSchur;
   if (s == "sparse_schur") return o::BALinearSolver::kSparseSchur;
   if (s == "iterative_schur") return o::BALinearSolver::kIterativeSchur;
-  throw py::value_error("expected 'auto', 'dense_schur', 'sparse_schur' or 'iterative_schur', got '" + s + "'");
+  throw py::value_error("expected 'auto', 'builtin_dense_schur', 'dense_schur', 'sparse_schur' or "
+                        "'iterative_schur', got '" + s + "'");
 }
 
 // **options of bundle_adjust (ranges as pose_option_fields).
@@ -337,7 +339,10 @@ camera : twistslam.geometry.StereoCamera
     huber_delta_mono, chi2_stereo (7.815), chi2_mono (5.991), remove_outliers (True),
     num_threads (2), min_depth (0.1 m), function_tolerance (1e-6),
     initial_trust_region_radius (10),
-    linear_solver ('auto' | 'dense_schur' | 'sparse_schur' | 'iterative_schur').
+    linear_solver ('auto' | 'builtin_dense_schur' | 'dense_schur' | 'sparse_schur' |
+    'iterative_schur'): 'auto' solves a problem of up to 100 free poses with the built-in
+    Levenberg-Marquardt (points eliminated, dense reduced system; Ceres' rules), larger
+    ones with Ceres' sparse Schur; the others name Ceres' linear solvers.
 
 Returns
 -------

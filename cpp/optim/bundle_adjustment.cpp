@@ -6,12 +6,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "geometry/se3.hpp"
 #include "optim/ba_terms.hpp"
 #include "optim/pose_parameterization.hpp"
+#include "optim/schur_lm.hpp"
 
 namespace twistslam::optim {
 
@@ -63,9 +65,11 @@ class StaticReprojectionTerms {
   // Adds the blocks and residuals; an observation is used if all its data is finite and the
   // point is in front of the camera at the initial state. A keyframe gets its block with its
   // first used observation (the dynamic terms use these blocks, and skip keyframes without).
-  void add_to(ProblemBuilder& b) {
+  // With `lm`, the observations go to that solver (on the builder's blocks) instead of Ceres.
+  void add_to(ProblemBuilder& b, detail::SchurLM* lm = nullptr) {
     kf_block_.assign(p_.keyframes.size(), -1);
     pt_block_.assign(p_.points.size(), -1);
+    std::vector<int> lm_pose(lm ? p_.keyframes.size() : 0, -1), lm_point(lm ? p_.points.size() : 0, -1);
     std::vector<std::uint8_t> kf_ok(p_.keyframes.size()), pt_ok(p_.points.size());
     for (size_t k = 0; k < p_.keyframes.size(); ++k) {
       const Mat4& T = p_.keyframes[k].T_c_w;
@@ -82,18 +86,33 @@ class StaticReprojectionTerms {
       const ObservationError err = error(e, p_.keyframes[o.keyframe].T_c_w, p_.points[o.point].X_w);
       if (!err.in_front) continue;
       if (kf_block_[o.keyframe] < 0) {
-        kf_block_[o.keyframe] = b.add_pose(p_.keyframes[o.keyframe].T_c_w, p_.keyframes[o.keyframe].fixed);
+        const bool fixed = p_.keyframes[o.keyframe].fixed;
+        kf_block_[o.keyframe] = b.add_pose(p_.keyframes[o.keyframe].T_c_w, fixed);
+        if (lm) lm_pose[o.keyframe] = lm->add_pose(b.data(kf_block_[o.keyframe]), fixed);
       }
       if (pt_block_[o.point] < 0) {
-        pt_block_[o.point] = b.add_point(p_.points[o.point].X_w, p_.points[o.point].fixed);
+        const bool fixed = p_.points[o.point].fixed;
+        pt_block_[o.point] = b.add_point(p_.points[o.point].X_w, fixed);
+        if (lm) lm_point[o.point] = lm->add_point(b.data(pt_block_[o.point]), fixed);
       }
       const bool stereo = o.u_right >= 0;
+      used_[e] = 1;
+      ++num_used_;
+      if (lm) {
+        detail::SchurLMObservation obs;
+        obs.pose = lm_pose[o.keyframe];
+        obs.point = lm_point[o.point];
+        obs.z = Vec3(o.uv.x(), o.uv.y(), stereo ? o.u_right : -1.0);
+        obs.sqrt_info = std::sqrt(o.inv_sigma2);
+        obs.huber_delta = stereo ? opt_.huber_delta_stereo : opt_.huber_delta_mono;
+        obs.chi2_gate = opt_.remove_outliers ? threshold(o) : 0.0;
+        lm->add_observation(obs);
+        continue;
+      }
       const auto id = b.add_stereo_reprojection(
           kf_block_[o.keyframe], pt_block_[o.point], cam_, o.uv, o.u_right, o.inv_sigma2,
           stereo ? opt_.huber_delta_stereo : opt_.huber_delta_mono, opt_.min_depth);
       if (opt_.remove_outliers) b.gate(id, threshold(o));
-      used_[e] = 1;
-      ++num_used_;
     }
   }
 
@@ -169,6 +188,11 @@ void restore(ProblemBuilder& b, const std::vector<std::vector<double>>& s) {
   for (int i = 0; i < b.num_blocks(); ++i) std::copy(s[i].begin(), s[i].end(), b.data(i));
 }
 
+int num_free_keyframes(const BAProblem& p) {
+  return static_cast<int>(std::count_if(p.keyframes.begin(), p.keyframes.end(),
+                                        [](const BAKeyframe& k) { return !k.fixed; }));
+}
+
 }  // namespace
 
 BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoCamera& cam,
@@ -199,8 +223,16 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
       doubles += detail::kPoseSize * o.poses.size() + 3 * o.points_o.size();
     builder.reserve(static_cast<int>(doubles));
   }
+  // a static problem (no object terms) goes to the built-in dense-Schur LM (schur_lm.hpp)
+  std::unique_ptr<detail::SchurLM> lm;
+  if (problem.objects.empty() && problem.dynamic_observations.empty() &&
+      (opt.linear_solver == BALinearSolver::kBuiltinDenseSchur ||
+       (opt.linear_solver == BALinearSolver::kAuto && num_free_keyframes(problem) <= 100))) {
+    builder.keep_blocks_out_of_ceres();
+    lm = std::make_unique<detail::SchurLM>(cam, opt.min_depth);
+  }
   StaticReprojectionTerms stat(problem, cam, opt);
-  stat.add_to(builder);
+  stat.add_to(builder, lm.get());
   DynamicReprojectionTerms dyna(problem, cam, opt);
   dyna.add_to(builder, stat.keyframe_blocks());
   report.num_residuals = stat.num_used();
@@ -208,7 +240,7 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
   report.num_object_motions = dyna.num_motions();
   report.num_object_boxes = dyna.num_boxes();
   report.num_object_const = dyna.num_const();
-  if (builder.num_residuals() == 0) {
+  if ((lm ? lm->num_observations() : builder.num_residuals()) == 0) {
     report.message = "no valid observations";
     report.solve_ms = elapsed_ms();
     return report;
@@ -223,7 +255,24 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
   so.initial_trust_region_radius = opt.initial_trust_region_radius;
   so.max_iterations = opt.remove_outliers ? opt.max_iterations_first
                                           : opt.max_iterations_first + opt.max_iterations_second;
-  const detail::SolveSummary first = builder.solve(so);
+  const auto solve = [&]() {
+    if (!lm) return builder.solve(so);
+    detail::SchurLMOptions lo;
+    lo.max_iterations = so.max_iterations;
+    lo.function_tolerance = so.function_tolerance;
+    lo.gradient_tolerance = so.gradient_tolerance;
+    lo.parameter_tolerance = so.parameter_tolerance;
+    lo.initial_trust_region_radius = so.initial_trust_region_radius;
+    const detail::SchurLMSummary s = lm->solve(lo);
+    detail::SolveSummary out;
+    out.usable = s.usable;
+    out.iterations = s.iterations;
+    out.initial_cost = s.initial_cost;
+    out.final_cost = s.final_cost;
+    out.message = s.message;
+    return out;
+  };
+  const detail::SolveSummary first = solve();
   report.iterations = first.iterations;
   report.message = first.message;
   if (!first.usable) {
@@ -231,11 +280,12 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
     return report;  // nothing written back
   }
   if (opt.remove_outliers && opt.max_iterations_second > 0) {
-    builder.remove_gated_outliers();
-    if (builder.num_residuals() > 0) {
+    if (lm) lm->remove_gated_outliers();
+    else builder.remove_gated_outliers();
+    if ((lm ? lm->num_observations() : builder.num_residuals()) > 0) {
       const auto before = snapshot(builder);
       so.max_iterations = opt.max_iterations_second;
-      const detail::SolveSummary second = builder.solve(so);
+      const detail::SolveSummary second = solve();
       report.iterations += second.iterations;
       report.message = second.message;
       if (!second.usable) restore(builder, before);  // keep the first pass' solution

@@ -109,8 +109,14 @@ struct BAProblem {
 };
 
 enum class BALinearSolver {
-  kAuto,           // dense Schur for up to 100 free poses, sparse Schur above
-  kDenseSchur,
+  // a static problem with up to 100 free poses: kBuiltinDenseSchur; otherwise Ceres' dense
+  // Schur for up to 100 free poses, its sparse Schur above
+  kAuto,
+  // Levenberg-Marquardt of our own with the points eliminated (optim/schur_lm.hpp), Ceres'
+  // DENSE_SCHUR rules without its generic machinery; static problems only (with objects:
+  // Ceres' dense Schur)
+  kBuiltinDenseSchur,
+  kDenseSchur,     // Ceres' DENSE_SCHUR
   kSparseSchur,
   kIterativeSchur,
 };

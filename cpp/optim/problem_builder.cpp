@@ -38,12 +38,14 @@ ProblemBuilder::~ProblemBuilder() {
 
 int ProblemBuilder::register_block(double* data, int size, bool is_pose, bool fixed,
                                    bool eliminate) {
-  if (is_pose) {
-    problem_->AddParameterBlock(data, size, pose_manifold_.get());
-  } else {
-    problem_->AddParameterBlock(data, size);
+  if (blocks_in_ceres_) {
+    if (is_pose) {
+      problem_->AddParameterBlock(data, size, pose_manifold_.get());
+    } else {
+      problem_->AddParameterBlock(data, size);
+    }
+    if (fixed) problem_->SetParameterBlockConstant(data);
   }
-  if (fixed) problem_->SetParameterBlockConstant(data);
   blocks_.push_back({data, size, is_pose, fixed, eliminate});
   return static_cast<int>(blocks_.size()) - 1;
 }
@@ -236,6 +238,7 @@ SolveSummary ProblemBuilder::solve(const SolveOptions& opt) {
   o.initial_trust_region_radius = opt.initial_trust_region_radius;
   o.logging_type = ceres::SILENT;
   switch (opt.linear_solver) {
+    case BALinearSolver::kBuiltinDenseSchur:  // a problem it cannot take (object terms)
     case BALinearSolver::kDenseSchur: o.linear_solver_type = ceres::DENSE_SCHUR; break;
     case BALinearSolver::kSparseSchur: o.linear_solver_type = ceres::SPARSE_SCHUR; break;
     case BALinearSolver::kIterativeSchur:

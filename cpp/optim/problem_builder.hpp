@@ -68,6 +68,10 @@ class ProblemBuilder {
   // whose address, and so order, is up to the heap). Bit-identical also needs one thread:
   // Ceres' threaded evaluation and elimination sum in scheduling order.
   void reserve(int num_doubles);
+  // From now on blocks get their storage here but are not handed to Ceres: for a solver of
+  // its own that works on the builder's parameters (SchurLM, schur_lm.hpp) and still uses
+  // pose(), point(), data() and the snapshots of the callers.
+  void keep_blocks_out_of_ceres() { blocks_in_ceres_ = false; }
   int add_pose(const Mat4& T, bool fixed);
   int add_point(const Vec3& X, bool fixed);
   // A generic Euclidean block (twist, size, ...); `eliminate` puts it in the Schur
@@ -184,6 +188,7 @@ class ProblemBuilder {
   std::vector<Block> blocks_;
   std::map<double, std::unique_ptr<ceres::LossFunction>> losses_;
   std::vector<std::pair<ceres::ResidualBlockId, double>> gated_;
+  bool blocks_in_ceres_ = true;
 };
 
 }  // namespace twistslam::optim::detail

@@ -231,6 +231,50 @@ TEST(BundleAdjustment, AllPointsBehindCamera) {
     EXPECT_EQ(s.problem.keyframes[k].T_c_w, before.keyframes[k].T_c_w);
 }
 
+// The built-in Levenberg-Marquardt (optim/schur_lm.hpp, what kAuto runs on a static problem)
+// follows Ceres' DENSE_SCHUR step for step: the same iterations (rejected steps included: a
+// wide first trust region makes some), the same outliers, poses and points equal to rounding.
+TEST(BundleAdjustment, BuiltinSchurLMFollowsCeresDenseSchur) {
+  const auto cam = kitti_camera();
+  struct Case {
+    int first, second;
+    double radius, outliers;
+    unsigned seed;
+  };
+  for (const Case c : {Case{3, 4, 10, 0.05, 5}, Case{5, 10, 1e4, 0.2, 6}, Case{2, 0, 10, 0.0, 7}}) {
+    SCOPED_TRACE("seed " + std::to_string(c.seed));
+    BAScene s = make_ba_scene(8, 2, 800, c.outliers, c.seed);
+    for (size_t j = 0; j < s.problem.points.size(); j += 7) s.problem.points[j].fixed = true;
+    BundleAdjustmentOptions o;
+    o.num_threads = 1;
+    o.max_iterations_first = c.first;
+    o.max_iterations_second = c.second;
+    o.initial_trust_region_radius = c.radius;
+    BAProblem ceres = s.problem, builtin = s.problem;
+    o.linear_solver = BALinearSolver::kDenseSchur;
+    const auto rc = bundle_adjust(ceres, cam, o);
+    o.linear_solver = BALinearSolver::kBuiltinDenseSchur;
+    const auto rb = bundle_adjust(builtin, cam, o);
+    ASSERT_TRUE(rc.converged) << rc.message;
+    ASSERT_TRUE(rb.converged) << rb.message;
+    EXPECT_EQ(rb.iterations, rc.iterations) << rc.message << " / " << rb.message;
+    EXPECT_NEAR(rb.final_cost, rc.final_cost, 1e-9 * rc.final_cost);
+    EXPECT_EQ(rb.num_outliers, rc.num_outliers);
+    EXPECT_EQ(rb.outlier, rc.outlier);
+    for (size_t k = 0; k < ceres.keyframes.size(); ++k) {
+      EXPECT_LT(translation_error(builtin.keyframes[k].T_c_w, ceres.keyframes[k].T_c_w), 1e-9) << k;
+      // (an angle from acos bottoms out at ~1e-6 deg: the matrices are compared)
+      const Mat3 dR = (builtin.keyframes[k].T_c_w - ceres.keyframes[k].T_c_w).topLeftCorner<3, 3>();
+      EXPECT_LT(dR.norm(), 1e-10) << k;
+    }
+    double worst = 0;
+    for (size_t j = 0; j < ceres.points.size(); ++j)
+      worst = std::max(worst, (builtin.points[j].X_w - ceres.points[j].X_w).norm());
+    EXPECT_LT(worst, 1e-5);  // far mono points are weakly held: a rounding moves them most
+    EXPECT_LT(rb.final_rmse_px, 0.5 * rb.initial_rmse_px);
+  }
+}
+
 TEST(BundleAdjustment, EverythingFixed) {
   const auto cam = kitti_camera();
   BAScene s = make_ba_scene(3, 3, 100, 0.0, 11);
