@@ -27,7 +27,6 @@
 #include "geometry/stereo_camera.hpp"
 #include "geometry/types.hpp"
 #include "optim/bundle_adjustment.hpp"
-#include "optim/schur_lm.hpp"
 
 namespace twistslam::optim::detail {
 
@@ -51,10 +50,6 @@ struct SolveSummary {
   std::string message;
 };
 
-// The built-in solvers' (schur_lm.hpp, block_lm.hpp) options and summary from / to these
-SchurLMOptions builtin_options(const SolveOptions& options);
-SolveSummary solve_summary(const SchurLMSummary& summary);
-
 class ProblemBuilder {
  public:
   ProblemBuilder();
@@ -73,11 +68,9 @@ class ProblemBuilder {
   // whose address, and so order, is up to the heap). Bit-identical also needs one thread:
   // Ceres' threaded evaluation and elimination sum in scheduling order.
   void reserve(int num_doubles);
-  // From now on (call it first) blocks get their storage here but are not handed to Ceres,
-  // and residuals are kept for solve() to run the built-in Levenberg-Marquardt
-  // (block_lm.hpp) instead of Ceres' solver -- or for a solver of the caller's own on the
-  // builder's parameters (SchurLM, schur_lm.hpp). pose(), point(), data() work as before;
-  // gate() is refused (no outlier gating there).
+  // From now on blocks get their storage here but are not handed to Ceres: for a solver of
+  // its own that works on the builder's parameters (SchurLM, schur_lm.hpp) and still uses
+  // pose(), point(), data() and the snapshots of the callers.
   void keep_blocks_out_of_ceres() { blocks_in_ceres_ = false; }
   int add_pose(const Mat4& T, bool fixed);
   int add_point(const Vec3& X, bool fixed);
@@ -181,10 +174,6 @@ class ProblemBuilder {
     bool eliminate;
   };
   int register_block(double* data, int size, bool is_pose, bool fixed, bool eliminate);
-  // every add_* ends here: into Ceres' problem, or kept for the built-in solver
-  ceres::ResidualBlockId add_block(ceres::CostFunction* cost, ceres::LossFunction* loss,
-                                   const std::vector<int>& blocks);
-  SolveSummary solve_builtin(const SolveOptions& options);
   double* allocate(int size);  // `size` doubles from the current buffer (a new one if full)
 
   struct Buffer {
@@ -200,12 +189,6 @@ class ProblemBuilder {
   std::map<double, std::unique_ptr<ceres::LossFunction>> losses_;
   std::vector<std::pair<ceres::ResidualBlockId, double>> gated_;
   bool blocks_in_ceres_ = true;
-  struct Recorded {
-    std::unique_ptr<ceres::CostFunction> cost;
-    ceres::LossFunction* loss;  // one of losses_
-    std::vector<int> blocks;
-  };
-  std::vector<Recorded> recorded_;
 };
 
 }  // namespace twistslam::optim::detail
