@@ -255,22 +255,15 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
   so.initial_trust_region_radius = opt.initial_trust_region_radius;
   so.max_iterations = opt.remove_outliers ? opt.max_iterations_first
                                           : opt.max_iterations_first + opt.max_iterations_second;
-  const auto solve = [&]() {
+  const auto solve = [&]() -> detail::SolveSummary {
     if (!lm) return builder.solve(so);
-    detail::SchurLMOptions lo;
+    detail::SchurLMOptions lo;  // the same solve options, as the built-in solver takes them
     lo.max_iterations = so.max_iterations;
     lo.function_tolerance = so.function_tolerance;
     lo.gradient_tolerance = so.gradient_tolerance;
     lo.parameter_tolerance = so.parameter_tolerance;
     lo.initial_trust_region_radius = so.initial_trust_region_radius;
-    const detail::SchurLMSummary s = lm->solve(lo);
-    detail::SolveSummary out;
-    out.usable = s.usable;
-    out.iterations = s.iterations;
-    out.initial_cost = s.initial_cost;
-    out.final_cost = s.final_cost;
-    out.message = s.message;
-    return out;
+    return lm->solve(lo);
   };
   const detail::SolveSummary first = solve();
   report.iterations = first.iterations;

@@ -27,6 +27,7 @@
 #include "geometry/stereo_camera.hpp"
 #include "geometry/types.hpp"
 #include "optim/bundle_adjustment.hpp"
+#include "optim/schur_lm.hpp"
 
 namespace twistslam::optim::detail {
 
@@ -43,12 +44,9 @@ struct SolveOptions {
   std::optional<ceres::LinearSolverType> linear_solver_override;
 };
 
-struct SolveSummary {
-  bool usable = false;  // Ceres produced a solution (converged or ran out of iterations)
-  int iterations = 0;
-  double initial_cost = 0, final_cost = 0;
-  std::string message;
-};
+// usable: a solution was produced (converged or ran out of iterations); the built-in
+// solver's summary (schur_lm.hpp) is the same struct
+using SolveSummary = SchurLMSummary;
 
 class ProblemBuilder {
  public:
