@@ -256,14 +256,7 @@ BundleAdjustmentReport bundle_adjust(BAProblem& problem, const geometry::StereoC
   so.max_iterations = opt.remove_outliers ? opt.max_iterations_first
                                           : opt.max_iterations_first + opt.max_iterations_second;
   const auto solve = [&]() -> detail::SolveSummary {
-    if (!lm) return builder.solve(so);
-    detail::SchurLMOptions lo;  // the same solve options, as the built-in solver takes them
-    lo.max_iterations = so.max_iterations;
-    lo.function_tolerance = so.function_tolerance;
-    lo.gradient_tolerance = so.gradient_tolerance;
-    lo.parameter_tolerance = so.parameter_tolerance;
-    lo.initial_trust_region_radius = so.initial_trust_region_radius;
-    return lm->solve(lo);
+    return lm ? lm->solve(detail::builtin_options(so)) : builder.solve(so);
   };
   const detail::SolveSummary first = solve();
   report.iterations = first.iterations;

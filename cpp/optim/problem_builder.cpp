@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "optim/block_lm.hpp"
 #include "optim/dynamic_reprojection_cost.hpp"
 #include "optim/heading_cost.hpp"
 #include "optim/object_costs.hpp"
@@ -110,79 +111,79 @@ ceres::ResidualBlockId ProblemBuilder::add_stereo_reprojection(
   } else {
     cost = new MonoReprojectionCost(&cam, uv, inv_sigma2, min_depth);
   }
-  return problem_->AddResidualBlock(cost, huber(huber_delta), blocks_[pose].data,
-                                    blocks_[point].data);
+  return add_block(cost, huber(huber_delta), {pose, point});
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_constant_velocity(int pose_a, int pose_b, int pose_c,
                                                              const Mat6& Pi, double sigma_t,
                                                              double sigma_r, double huber_delta) {
-  return problem_->AddResidualBlock(make_constant_velocity_cost(Pi, sigma_t, sigma_r),
-                                    huber(huber_delta), blocks_[pose_a].data,
-                                    blocks_[pose_b].data, blocks_[pose_c].data);
+  return add_block(make_constant_velocity_cost(Pi, sigma_t, sigma_r), huber(huber_delta),
+                   {pose_a, pose_b, pose_c});
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_detection_twist(int pose_a, int pose_b, const Mat6& Pi,
                                                            const Vec6& xi_d, double sigma_t,
                                                            double sigma_r, double huber_delta,
                                                            double information_scale) {
-  return problem_->AddResidualBlock(
-      make_detection_twist_cost(Pi, xi_d, sigma_t, sigma_r, information_scale),
-      huber(huber_delta), blocks_[pose_a].data, blocks_[pose_b].data);
+  return add_block(make_detection_twist_cost(Pi, xi_d, sigma_t, sigma_r, information_scale),
+                   huber(huber_delta), {pose_a, pose_b});
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_twist_measurement(int pose_a, int pose_b,
                                                              const Vec6& xi_m,
                                                              const Mat6& covariance,
                                                              double huber_delta) {
-  return problem_->AddResidualBlock(make_twist_measurement_cost(covariance, xi_m),
-                                    huber(huber_delta), blocks_[pose_a].data, blocks_[pose_b].data);
+  return add_block(make_twist_measurement_cost(covariance, xi_m), huber(huber_delta),
+                   {pose_a, pose_b});
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_detection_pose(int pose, const Mat4& T_det,
                                                           double sigma_t, double sigma_r,
                                                           double huber_delta,
                                                           double information_scale) {
-  return problem_->AddResidualBlock(
-      make_detection_pose_cost(T_det, sigma_t, sigma_r, information_scale), huber(huber_delta),
-      blocks_[pose].data);
+  return add_block(make_detection_pose_cost(T_det, sigma_t, sigma_r, information_scale),
+                   huber(huber_delta), {pose});
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_link(int pose_a, int pose_b, const Mat6& Pi,
                                                 double sigma_t, double sigma_r) {
-  return problem_->AddResidualBlock(make_link_cost(Pi, sigma_t, sigma_r), nullptr,
-                                    blocks_[pose_a].data, blocks_[pose_b].data);
+  return add_block(make_link_cost(Pi, sigma_t, sigma_r), nullptr, {pose_a, pose_b});
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_heading(int pose_a, int pose_b, const Vec3& axis_o,
                                                    const Vec3& up_w, const Vec3& d_w,
                                                    double sigma_m, double huber_delta) {
-  return problem_->AddResidualBlock(make_heading_cost(axis_o, up_w, d_w, sigma_m),
-                                    huber(huber_delta), blocks_[pose_a].data,
-                                    blocks_[pose_b].data);
+  return add_block(make_heading_cost(axis_o, up_w, d_w, sigma_m), huber(huber_delta),
+                   {pose_a, pose_b});
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_axis_free_heading(int pose_a, int pose_b, int pose_c,
                                                              const Vec3& up_w, const Vec3& d1_w,
                                                              const Vec3& d2_w, double sigma_m,
                                                              double huber_delta) {
-  return problem_->AddResidualBlock(make_axis_free_heading_cost(up_w, d1_w, d2_w, sigma_m),
-                                    huber(huber_delta), blocks_[pose_a].data,
-                                    blocks_[pose_b].data, blocks_[pose_c].data);
+  return add_block(make_axis_free_heading_cost(up_w, d1_w, d2_w, sigma_m), huber(huber_delta),
+                   {pose_a, pose_b, pose_c});
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_dynamic_reprojection(
     int camera_pose, int object_pose, int object_point, const geometry::StereoCamera& cam,
     const Vec2& uv, double u_right, double inv_sigma2, double huber_delta, double min_depth) {
-  return problem_->AddResidualBlock(
-      make_dynamic_reprojection_cost(&cam, uv, u_right, inv_sigma2, min_depth),
-      huber(huber_delta), blocks_[camera_pose].data, blocks_[object_pose].data,
-      blocks_[object_point].data);
+  return add_block(make_dynamic_reprojection_cost(&cam, uv, u_right, inv_sigma2, min_depth),
+                   huber(huber_delta), {camera_pose, object_pose, object_point});
 }
 
 ceres::ResidualBlockId ProblemBuilder::add_residual(ceres::CostFunction* cost,
                                                     ceres::LossFunction* loss,
                                                     const std::vector<int>& blocks) {
+  return add_block(cost, loss, blocks);
+}
+
+ceres::ResidualBlockId ProblemBuilder::add_block(ceres::CostFunction* cost, ceres::LossFunction* loss,
+                                                 const std::vector<int>& blocks) {
+  if (!blocks_in_ceres_) {  // kept for the built-in solver
+    recorded_.push_back({std::unique_ptr<ceres::CostFunction>(cost), loss, blocks});
+    return nullptr;
+  }
   std::vector<double*> ptrs;
   ptrs.reserve(blocks.size());
   for (int b : blocks) ptrs.push_back(blocks_[b].data);
@@ -190,6 +191,8 @@ ceres::ResidualBlockId ProblemBuilder::add_residual(ceres::CostFunction* cost,
 }
 
 void ProblemBuilder::gate(ceres::ResidualBlockId id, double chi2_threshold) {
+  if (!blocks_in_ceres_)
+    throw std::logic_error("ProblemBuilder::gate: the built-in solver has no outlier gating");
   gated_.emplace_back(id, chi2_threshold);
 }
 
@@ -213,7 +216,9 @@ int ProblemBuilder::remove_gated_outliers() {
   return removed;
 }
 
-int ProblemBuilder::num_residuals() const { return problem_->NumResidualBlocks(); }
+int ProblemBuilder::num_residuals() const {
+  return blocks_in_ceres_ ? problem_->NumResidualBlocks() : static_cast<int>(recorded_.size());
+}
 
 int ProblemBuilder::num_free_poses() const {
   return static_cast<int>(std::count_if(blocks_.begin(), blocks_.end(),
@@ -222,10 +227,11 @@ int ProblemBuilder::num_free_poses() const {
 
 SolveSummary ProblemBuilder::solve(const SolveOptions& opt) {
   SolveSummary out;
-  if (problem_->NumResidualBlocks() == 0) {
+  if (num_residuals() == 0) {
     out.message = "no residuals";
     return out;
   }
+  if (!blocks_in_ceres_) return solve_builtin(opt);
   ceres::Solver::Options o;
   o.minimizer_type = ceres::TRUST_REGION;
   o.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -284,6 +290,26 @@ SolveSummary ProblemBuilder::solve(const SolveOptions& opt) {
   out.final_cost = summary.final_cost;
   out.message = summary.message;
   return out;
+}
+
+SchurLMOptions builtin_options(const SolveOptions& o) {
+  SchurLMOptions lo;
+  lo.max_iterations = std::max(o.max_iterations, 0);
+  lo.function_tolerance = o.function_tolerance;
+  lo.gradient_tolerance = o.gradient_tolerance;
+  lo.parameter_tolerance = o.parameter_tolerance;
+  lo.initial_trust_region_radius = o.initial_trust_region_radius;
+  return lo;
+}
+
+SolveSummary ProblemBuilder::solve_builtin(const SolveOptions& opt) {
+  std::vector<BlockLMBlock> blocks;
+  blocks.reserve(blocks_.size());
+  for (const Block& b : blocks_) blocks.push_back({b.data, b.size, b.is_pose, b.fixed, b.eliminate});
+  std::vector<BlockLMResidual> residuals;
+  residuals.reserve(recorded_.size());
+  for (const Recorded& r : recorded_) residuals.push_back({r.cost.get(), r.loss, r.blocks});
+  return solve_block_lm(blocks, residuals, builtin_options(opt));
 }
 
 }  // namespace twistslam::optim::detail

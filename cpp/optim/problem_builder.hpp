@@ -48,6 +48,9 @@ struct SolveOptions {
 // solver's summary (schur_lm.hpp) is the same struct
 using SolveSummary = SchurLMSummary;
 
+// The built-in solvers' (schur_lm.hpp, block_lm.hpp) options from these
+SchurLMOptions builtin_options(const SolveOptions& options);
+
 class ProblemBuilder {
  public:
   ProblemBuilder();
@@ -66,9 +69,11 @@ class ProblemBuilder {
   // whose address, and so order, is up to the heap). Bit-identical also needs one thread:
   // Ceres' threaded evaluation and elimination sum in scheduling order.
   void reserve(int num_doubles);
-  // From now on blocks get their storage here but are not handed to Ceres: for a solver of
-  // its own that works on the builder's parameters (SchurLM, schur_lm.hpp) and still uses
-  // pose(), point(), data() and the snapshots of the callers.
+  // From now on (call it first) blocks get their storage here but are not handed to Ceres,
+  // and residuals are kept for solve() to run the built-in Levenberg-Marquardt
+  // (block_lm.hpp) instead of Ceres' solver -- or for a solver of the caller's own on the
+  // builder's parameters (SchurLM, schur_lm.hpp). pose(), point(), data() work as before;
+  // gate() is refused (no outlier gating there).
   void keep_blocks_out_of_ceres() { blocks_in_ceres_ = false; }
   int add_pose(const Mat4& T, bool fixed);
   int add_point(const Vec3& X, bool fixed);
@@ -172,6 +177,10 @@ class ProblemBuilder {
     bool eliminate;
   };
   int register_block(double* data, int size, bool is_pose, bool fixed, bool eliminate);
+  // every add_* ends here: into Ceres' problem, or kept for the built-in solver
+  ceres::ResidualBlockId add_block(ceres::CostFunction* cost, ceres::LossFunction* loss,
+                                   const std::vector<int>& blocks);
+  SolveSummary solve_builtin(const SolveOptions& options);
   double* allocate(int size);  // `size` doubles from the current buffer (a new one if full)
 
   struct Buffer {
@@ -187,6 +196,12 @@ class ProblemBuilder {
   std::map<double, std::unique_ptr<ceres::LossFunction>> losses_;
   std::vector<std::pair<ceres::ResidualBlockId, double>> gated_;
   bool blocks_in_ceres_ = true;
+  struct Recorded {
+    std::unique_ptr<ceres::CostFunction> cost;
+    ceres::LossFunction* loss;  // one of losses_
+    std::vector<int> blocks;
+  };
+  std::vector<Recorded> recorded_;
 };
 
 }  // namespace twistslam::optim::detail

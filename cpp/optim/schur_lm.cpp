@@ -10,37 +10,15 @@
 #include <string>
 
 #include "geometry/so3.hpp"
+#include "optim/lm_trust_region.hpp"
 #include "optim/stereo_projection.hpp"
 
 namespace twistslam::optim::detail {
 
 namespace {
 
-// Ceres' Levenberg-Marquardt constants (TrustRegionStrategy / Solver::Options defaults)
-constexpr double kMinDiagonal = 1e-6;
-constexpr double kMaxDiagonal = 1e32;
-constexpr double kMaxRadius = 1e16;
-constexpr double kMinRadius = 1e-32;
-constexpr double kMinRelativeDecrease = 1e-3;
-constexpr int kMaxConsecutiveInvalidSteps = 5;
-
 using Mat36 = Eigen::Matrix<double, 3, 6>;
 using Mat63 = Eigen::Matrix<double, 6, 3>;
-
-// q <- [cos|w|, sin|w| w / |w|] * q, t <- t + v (the pose manifold's Plus)
-void pose_plus(const double* x, const double* delta, double* out) {
-  for (int k = 0; k < 3; ++k) out[k] = x[k] + delta[k];
-  const Eigen::Map<const Eigen::Quaterniond> q(x + 3);
-  const Vec3 w(delta[3], delta[4], delta[5]);
-  const double angle = w.norm();
-  Eigen::Map<Eigen::Quaterniond> q_out(out + 3);
-  if (angle == 0.0) {
-    q_out = q;
-    return;
-  }
-  const Vec3 axis = (std::sin(angle) / angle) * w;
-  q_out = Eigen::Quaterniond(std::cos(angle), axis.x(), axis.y(), axis.z()) * q;
-}
 
 }  // namespace
 
@@ -175,19 +153,14 @@ SchurLMSummary SchurLM::solve(const SchurLMOptions& options) {
   scale_p = (1.0 + scale_p.array().sqrt()).inverse().matrix();
   scale_q = (1.0 + scale_q.array().sqrt()).inverse().matrix();
 
-  double radius = options.initial_trust_region_radius, decrease = 2.0;
-  int invalid_in_a_row = 0, steps = 0;
-  bool usable = true;
-  out.message = "maximum number of iterations";
+  LMControl control(options, &out);
   std::vector<Mat63> W(observations_.size());
   std::vector<Mat3> V(FQ);
   std::vector<Eigen::Matrix<double, 6, 6>> U(FP);
   Eigen::VectorXd gp(6 * FP), gq(3 * FQ), dp(6 * FP), dq(3 * FQ);
   std::vector<double> cand_p(xp.size()), cand_q(xq.size());
 
-  while (steps < options.max_iterations) {
-    ++steps;
-    ++out.iterations;
+  while (control.next_step()) {
     // normal equations of the scaled Jacobian J S: H = S J^T J S, g = S J^T r
     for (auto& u : U) u.setZero();
     for (auto& v : V) v.setZero();
@@ -215,13 +188,13 @@ SchurLMSummary SchurLM::solve(const SchurLMOptions& options) {
     Eigen::VectorXd rhs = -gp;
     for (int i = 0; i < FP; ++i) {
       for (int a = 0; a < 6; ++a)
-        U[i](a, a) += std::clamp(U[i](a, a), kMinDiagonal, kMaxDiagonal) / radius;
+        U[i](a, a) += lm_damping(U[i](a, a), control.radius());
       S.block<6, 6>(6 * i, 6 * i) = U[i];
     }
     std::vector<Mat3> V_inv(FQ);
     for (int j = 0; j < FQ; ++j) {
       for (int c = 0; c < 3; ++c)
-        V[j](c, c) += std::clamp(V[j](c, c), kMinDiagonal, kMaxDiagonal) / radius;
+        V[j](c, c) += lm_damping(V[j](c, c), control.radius());
       V_inv[j] = V[j].llt().solve(Mat3::Identity());
       for (int a = start[j]; a < start[j + 1]; ++a) {
         const int e = of_point[a], fi = pose_free_[observations_[e].pose];
@@ -268,17 +241,9 @@ SchurLMSummary SchurLM::solve(const SchurLMOptions& options) {
       }
     }
     if (!(model_change > 0)) {  // an invalid step: shrink the region and solve again
-      if (++invalid_in_a_row >= kMaxConsecutiveInvalidSteps) {
-        usable = false;
-        out.message = "too many invalid steps in a row";
-        break;
-      }
-      radius /= decrease;
-      decrease *= 2;
-      if (radius < kMinRadius) break;
+      if (control.invalid_step()) break;
       continue;
     }
-    invalid_in_a_row = 0;
     cand_p = xp;
     cand_q = xq;
     double step_sq = 0, x_sq = 0;
@@ -300,49 +265,26 @@ SchurLMSummary SchurLM::solve(const SchurLMOptions& options) {
         x_sq += xq[3 * j + c] * xq[3 * j + c];
       }
     }
-    const double x_norm = std::sqrt(x_sq);
-    // the tolerances end the solve without taking the step nor counting it (as Ceres)
-    if (std::sqrt(step_sq) <= options.parameter_tolerance * (x_norm + options.parameter_tolerance)) {
-      --out.iterations;
-      out.message = "parameter tolerance reached";
-      break;
+    if (control.step_too_short(std::sqrt(step_sq), std::sqrt(x_sq))) break;
+    const LMControl::Verdict verdict = control.judge(cost, evaluate(cand_p, cand_q, nullptr), model_change);
+    if (verdict == LMControl::Verdict::kStop) break;
+    if (verdict == LMControl::Verdict::kReject) continue;
+    xp.swap(cand_p);
+    xq.swap(cand_q);
+    cost = evaluate(xp, xq, &lin);
+    double g_max = 0;  // the unscaled gradient J^T r
+    for (size_t e = 0; e < observations_.size(); ++e) {
+      const int fi = pose_free_[observations_[e].pose], fj = point_free_[observations_[e].point];
+      if (fi >= 0) g_max = std::max(g_max, (lin.J_pose[e].transpose() * lin.r[e]).cwiseAbs().maxCoeff());
+      if (fj >= 0) g_max = std::max(g_max, (lin.J_point[e].transpose() * lin.r[e]).cwiseAbs().maxCoeff());
     }
-    const double candidate_cost = evaluate(cand_p, cand_q, nullptr);
-    if (std::isfinite(candidate_cost) &&
-        std::abs(cost - candidate_cost) <= options.function_tolerance * cost) {
-      --out.iterations;
-      out.message = "function tolerance reached";
+    if (g_max <= options.gradient_tolerance) {
+      out.message = "gradient tolerance reached";
       break;
-    }
-    const double rho = std::isfinite(candidate_cost) ? (cost - candidate_cost) / model_change
-                                                     : -std::numeric_limits<double>::infinity();
-    if (rho > kMinRelativeDecrease) {
-      xp.swap(cand_p);
-      xq.swap(cand_q);
-      cost = evaluate(xp, xq, &lin);
-      radius = std::min(kMaxRadius, radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)));
-      decrease = 2.0;
-      double g_max = 0;  // the unscaled gradient J^T r
-      for (size_t e = 0; e < observations_.size(); ++e) {
-        const int fi = pose_free_[observations_[e].pose], fj = point_free_[observations_[e].point];
-        if (fi >= 0) g_max = std::max(g_max, (lin.J_pose[e].transpose() * lin.r[e]).cwiseAbs().maxCoeff());
-        if (fj >= 0) g_max = std::max(g_max, (lin.J_point[e].transpose() * lin.r[e]).cwiseAbs().maxCoeff());
-      }
-      if (g_max <= options.gradient_tolerance) {
-        out.message = "gradient tolerance reached";
-        break;
-      }
-    } else {
-      radius /= decrease;
-      decrease *= 2;
-      if (radius < kMinRadius) {
-        out.message = "minimum trust region radius reached";
-        break;
-      }
     }
   }
-  out.usable = usable;
-  if (!usable) return out;
+  out.usable = control.usable();
+  if (!out.usable) return out;
   for (int i = 0; i < P; ++i) std::copy(xp.begin() + 7 * i, xp.begin() + 7 * i + 7, poses_[i]);
   for (int j = 0; j < Q; ++j) std::copy(xq.begin() + 3 * j, xq.begin() + 3 * j + 3, points_[j]);
   out.final_cost = cost;

@@ -79,6 +79,8 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
   const Mat4 S_inv = geometry::se3_inverse(S);
 
   detail::ProblemBuilder b;
+  const bool dense = n <= kDenseSchurMaxFrames;
+  if (dense && o.builtin_solver) b.keep_blocks_out_of_ceres();  // solve(): block_lm.hpp
   b.reserve(7 * 2 * n + 3 * static_cast<int>(w.X_o.size()));
   std::vector<int> camera_block(n), object_block(n), point_block(w.X_o.size(), -1);
   for (int i = 0; i < n; ++i) {
@@ -171,7 +173,7 @@ VisualObjectWindowSummary refine_visual_object_window(const geometry::StereoCame
   so.num_threads = 1;  // one thread: bit-for-bit reproducible (Ceres sums in scheduling order)
   // points eliminated; the reduced system of a sliding window's few poses is dense, a whole
   // track's (the final smoothing) is banded by e_const and the points' short lives
-  so.linear_solver_override = n <= kDenseSchurMaxFrames ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+  so.linear_solver_override = dense ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
   so.initial_trust_region_radius = 1e4;
   so.function_tolerance = o.function_tolerance;
   const detail::SolveSummary s = b.solve(so);

@@ -119,6 +119,10 @@ struct VisualObjectWindowOptions {
   // Ceres stops once an iteration changes the cost by less than this fraction of it
   double function_tolerance = 1e-6;
   double min_depth = 0.1;                // m
+  // Windows of up to 50 frames run the built-in Levenberg-Marquardt (optim/block_lm.hpp:
+  // Ceres' DENSE_SCHUR steps on the same residuals, without its solver's overhead); false,
+  // or a longer window (the final smoothing of a long track), Ceres' dense / sparse Schur
+  bool builtin_solver = true;
 };
 
 struct VisualObjectWindowSummary {

@@ -102,6 +102,51 @@ TEST(VisualObjectWindow, HeadingTermRemovesTheYawDriftOfACarSeenFromBehind) {
         << "frame " << f;
 }
 
+// The built-in Levenberg-Marquardt (optim/block_lm.hpp, the default for windows) takes Ceres'
+// DENSE_SCHUR steps on the same residuals: e_dyna with its points eliminated, the link,
+// e_head, e_const, and boxes (e_det pose and twist, Huber) and registrations (e_reg).
+TEST(VisualObjectWindow, TheBuiltinSolverFollowsCeresDenseSchur) {
+  const Mat6 Pi = geometry::projector_planar(kUp);
+  for (unsigned seed : {3u, 4u, 5u}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    LeadCarScene scene = lead_car(8, 1.5, seed);
+    scene.window.travel_axis_o = Vec3(0, 0, 1);
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> metre(0, 0.3);
+    for (size_t f = 0; f < scene.T_w_o_true.size(); ++f) {
+      Mat4 box = scene.T_w_o_true[f] * yaw(2.0 * kDeg * metre(rng));
+      box(0, 3) += metre(rng);
+      box(2, 3) += metre(rng);
+      scene.window.T_w_det.push_back(box);
+      scene.window.has_detection.push_back(f != 3);  // a frame without its box
+      const bool next = f + 1 < scene.T_w_o_true.size();
+      scene.window.M_w_reg.push_back(
+          next ? Mat4(scene.T_w_o_true[f + 1] * yaw(0.5 * kDeg * metre(rng)) *
+                      geometry::se3_inverse(scene.T_w_o_true[f]))
+               : Mat4::Identity());
+      scene.window.has_registration.push_back(next);
+    }
+    VisualObjectWindowOptions o;
+    o.max_iterations = 20;
+    o.function_tolerance = 1e-10;
+    VisualObjectWindow ceres = scene.window, builtin = scene.window;
+    o.builtin_solver = false;
+    const VisualObjectWindowSummary a = refine_visual_object_window(test_scenes::kitti_camera(), ceres, Pi, o);
+    o.builtin_solver = true;
+    const VisualObjectWindowSummary b = refine_visual_object_window(test_scenes::kitti_camera(), builtin, Pi, o);
+    ASSERT_TRUE(a.usable && b.usable);
+    EXPECT_EQ(b.num_residuals, a.num_residuals);
+    EXPECT_EQ(b.iterations, a.iterations);
+    EXPECT_GT(b.iterations, 3);
+    EXPECT_NEAR(b.final_cost, a.final_cost, 1e-9 * a.final_cost);
+    EXPECT_LT(b.final_cost, 0.5 * b.initial_cost);
+    for (size_t f = 0; f < ceres.T_w_o.size(); ++f)
+      EXPECT_LT((builtin.T_w_o[f] - ceres.T_w_o[f]).norm(), 1e-9) << "frame " << f;
+    for (size_t p = 0; p < ceres.X_o.size(); ++p)
+      EXPECT_LT((builtin.X_o[p] - ceres.X_o[p]).norm(), 1e-8) << "point " << p;
+  }
+}
+
 // function_tolerance: Ceres stops once an iteration lowers the cost by less than that fraction
 // of it. A loose tolerance takes fewer iterations and still lands near the converged answer.
 TEST(VisualObjectWindow, AFunctionToleranceStopsTheWindowEarlier) {
