@@ -147,6 +147,59 @@ TEST(VisualObjectWindow, TheBuiltinSolverFollowsCeresDenseSchur) {
   }
 }
 
+// The same on the windows' other shapes: mono rows (2-row residuals beside the 3-row stereo
+// ones), points held fixed (no eliminated block: only poses in the reduced system), more
+// fixed frames and a gauge pose inside the window, and the axis-free e_head over three poses.
+TEST(VisualObjectWindow, TheBuiltinSolverFollowsCeresOnMonoRowsFixedPointsAndAGauge) {
+  const Mat6 Pi = geometry::projector_planar(kUp);
+  struct Case {
+    const char* name;
+    std::function<void(VisualObjectWindow&, VisualObjectWindowOptions&)> set;
+  };
+  const std::vector<Case> cases = {
+      {"mono rows", [](VisualObjectWindow&, VisualObjectWindowOptions&) {}},
+      {"fixed points", [](VisualObjectWindow&, VisualObjectWindowOptions& o) { o.refine_points = false; }},
+      {"gauge", [](VisualObjectWindow& w, VisualObjectWindowOptions&) {
+         w.num_fixed_frames = 3;
+         w.gauge_frame = 5;
+       }},
+      {"axis-free heading", [](VisualObjectWindow& w, VisualObjectWindowOptions& o) {
+         w.travel_axis_o.setZero();
+         w.wheeled = true;
+         o.axis_free_heading_min_step_m = 0.5;
+       }},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    LeadCarScene scene = lead_car(8, 1.5, 7);
+    scene.window.travel_axis_o = Vec3(0, 0, 1);
+    for (size_t k = 0; k < scene.window.observations.size(); k += 3)
+      scene.window.observations[k].u_right = -1;  // every third observation mono
+    VisualObjectWindowOptions o;
+    o.max_iterations = 20;
+    o.function_tolerance = 1e-10;
+    c.set(scene.window, o);
+    VisualObjectWindow ceres = scene.window, builtin = scene.window;
+    o.builtin_solver = false;
+    const VisualObjectWindowSummary a = refine_visual_object_window(test_scenes::kitti_camera(), ceres, Pi, o);
+    o.builtin_solver = true;
+    const VisualObjectWindowSummary b = refine_visual_object_window(test_scenes::kitti_camera(), builtin, Pi, o);
+    ASSERT_TRUE(a.usable && b.usable);
+    EXPECT_EQ(b.iterations, a.iterations);
+    EXPECT_GT(b.iterations, 2);
+    EXPECT_NEAR(b.final_cost, a.final_cost, 1e-9 * a.final_cost);
+    EXPECT_LT(b.final_cost, b.initial_cost);
+    for (size_t f = 0; f < ceres.T_w_o.size(); ++f)
+      EXPECT_LT((builtin.T_w_o[f] - ceres.T_w_o[f]).norm(), 1e-9) << "frame " << f;
+    for (size_t p = 0; p < ceres.X_o.size(); ++p)
+      EXPECT_LT((builtin.X_o[p] - ceres.X_o[p]).norm(), 1e-7) << "point " << p;  // mono-only ones: rounding
+    if (!o.refine_points)
+      for (size_t p = 0; p < ceres.X_o.size(); ++p) EXPECT_EQ(builtin.X_o[p], scene.window.X_o[p]);
+    if (scene.window.gauge_frame >= 0)
+      EXPECT_EQ(builtin.T_w_o[scene.window.gauge_frame], scene.window.T_w_o[scene.window.gauge_frame]);
+  }
+}
+
 // function_tolerance: Ceres stops once an iteration lowers the cost by less than that fraction
 // of it. A loose tolerance takes fewer iterations and still lands near the converged answer.
 TEST(VisualObjectWindow, AFunctionToleranceStopsTheWindowEarlier) {
