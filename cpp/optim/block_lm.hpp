@@ -8,8 +8,9 @@
 // arithmetic of a problem this small. The steps follow Ceres' DENSE_SCHUR by the rules of
 // schur_lm.hpp (the same trust region, scaling, tolerances and iteration count), with Ceres'
 // loss correction (the Triggs correction where rho'' > 0, a plain rescaling elsewhere) and
-// the pose manifold of pose_parameterization.hpp. Each residual may hold at most one
-// eliminated block, of size 3.
+// the pose manifold of pose_parameterization.hpp. A free block is a pose or an eliminated
+// 3-vector; a residual holds at most one eliminated block, 4 blocks and 8 rows (the per-residual
+// matrices live on the stack: block_lm_terms.hpp).
 #include <ceres/cost_function.h>
 #include <ceres/loss_function.h>
 
@@ -34,8 +35,8 @@ struct BlockLMResidual {
   std::vector<int> blocks;                    // indices into the blocks, in the cost's order
 };
 
-// True when solve() can take these: every eliminated block of size 3 and at most one of
-// them in a residual.
+// True when solve() can take these: every free block a pose or an eliminated 3-vector, at
+// most one eliminated block, 4 blocks and 8 rows in a residual.
 bool block_lm_supports(const std::vector<BlockLMBlock>& blocks,
                        const std::vector<BlockLMResidual>& residuals);
 

@@ -12,6 +12,7 @@
 #include <memory>
 #include <cmath>
 #include <random>
+#include <string>
 #include <stdexcept>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "geometry/link_projection.hpp"
 #include "geometry/se3.hpp"
 #include "geometry/so3.hpp"
+#include "optim/block_lm.hpp"
 #include "optim/heading_cost.hpp"
 #include "optim/pose_parameterization.hpp"
 #include "optim/visual_object_window.hpp"
@@ -753,4 +755,41 @@ TEST(VisualObjectWindow, RestPriorStillsAFarParkedCarAndLeavesAWellSeenMovingOne
     ASSERT_TRUE(refine_visual_object_window(test_scenes::kitti_camera(), car.window, Pi, on).usable);
     EXPECT_NEAR(speed_m_per_frame(car.window.T_w_o), 1.2, 0.05) << "seed " << seed;
   }
+}
+
+// What the built-in solver cannot take it refuses by name, before touching a parameter: a
+// free block that is neither a pose nor an eliminated 3-vector, a residual with two
+// eliminated blocks, with more rows than its stack-sized matrices hold, or naming no block.
+TEST(VisualObjectWindow, TheBuiltinSolverRefusesProblemsItCannotTake) {
+  using detail::BlockLMBlock;
+  using detail::BlockLMResidual;
+  double pose[7] = {0, 0, 10, 0, 0, 0, 1}, a[3] = {1, 2, 3}, b[3] = {4, 5, 6}, twist[6] = {};
+  struct Rows : ceres::CostFunction {
+    Rows(int rows, const std::vector<int>& sizes) {
+      set_num_residuals(rows);
+      for (int s : sizes) mutable_parameter_block_sizes()->push_back(s);
+    }
+    bool Evaluate(double const* const*, double* r, double**) const override {
+      for (int k = 0; k < num_residuals(); ++k) r[k] = 1;
+      return true;
+    }
+  };
+  const Rows point_pose(2, {7, 3}), two_points(2, {3, 3}), nine_rows(9, {7}), on_twist(6, {6});
+  const std::vector<BlockLMBlock> blocks = {{pose, 7, true, false, false},
+                                            {a, 3, false, false, true},
+                                            {b, 3, false, false, true},
+                                            {twist, 6, false, false, false}};
+  const std::vector<BlockLMBlock> without_twist(blocks.begin(), blocks.begin() + 3);
+  EXPECT_TRUE(detail::block_lm_supports(without_twist, {{&point_pose, nullptr, {0, 1}}}));
+  EXPECT_FALSE(detail::block_lm_supports(blocks, {{&point_pose, nullptr, {0, 1}}}));  // free twist
+  EXPECT_FALSE(detail::block_lm_supports(without_twist, {{&two_points, nullptr, {1, 2}}}));
+  EXPECT_FALSE(detail::block_lm_supports(without_twist, {{&nine_rows, nullptr, {0}}}));
+  EXPECT_FALSE(detail::block_lm_supports(without_twist, {{&point_pose, nullptr, {0, 5}}}));
+  try {
+    detail::solve_block_lm(without_twist, {{&two_points, nullptr, {1, 2}}}, detail::SchurLMOptions());
+    ADD_FAILURE() << "two eliminated blocks in one residual were taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("solve_block_lm"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(a[0], 1.0);  // nothing was changed
 }
