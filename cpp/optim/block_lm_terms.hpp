@@ -69,6 +69,7 @@ struct Problem {
   Problem(const std::vector<BlockLMBlock>& b, const std::vector<BlockLMResidual>& r)
       : blocks(b), residuals(r) {
     std::vector<int> column(b.size(), -1), point(b.size(), -1);
+    offset.reserve(b.size());
     for (size_t i = 0; i < b.size(); ++i) {
       offset.push_back(state_size);
       state_size += b[i].size;
@@ -80,7 +81,7 @@ struct Problem {
         num_columns += kPoseTangent;
       }
     }
-    std::vector<std::vector<std::pair<int, int>>> of_point(num_points);
+    entry_begin.assign(num_points + 1, 0);  // first: each point's entry count, at [point + 1]
     terms.resize(r.size());
     for (size_t k = 0; k < r.size(); ++k) {
       Term& t = terms[k];
@@ -104,17 +105,22 @@ struct Problem {
         }
       }
       if (t.point < 0) continue;
-      for (int i = 0; i < t.num_blocks; ++i)
-        if (t.column[i] >= 0) of_point[t.point].push_back({static_cast<int>(k), i});
+      for (int i = 0; i < t.num_blocks; ++i) entry_begin[t.point + 1] += t.column[i] >= 0;
     }
-    // points without a free pose in any residual still need their 3x3 solve: an empty group
-    entry_begin.push_back(0);
-    for (const auto& entries : of_point) {
-      for (const auto& [k, i] : entries) {
-        entry_term.push_back(k);
-        entry_slot.push_back(i);
+    // grouped by point in residual order (a counting sort: no list per point); a point without
+    // a free pose in any residual keeps an empty group and still gets its 3x3 solve
+    for (int pt = 0; pt < num_points; ++pt) entry_begin[pt + 1] += entry_begin[pt];
+    entry_term.resize(entry_begin[num_points]);
+    entry_slot.resize(entry_begin[num_points]);
+    std::vector<int> next(entry_begin.begin(), entry_begin.end() - 1);
+    for (size_t k = 0; k < terms.size(); ++k) {
+      const Term& t = terms[k];
+      if (t.point < 0) continue;
+      for (int i = 0; i < t.num_blocks; ++i) {
+        if (t.column[i] < 0) continue;
+        entry_term[next[t.point]] = static_cast<int>(k);
+        entry_slot[next[t.point]++] = i;
       }
-      entry_begin.push_back(static_cast<int>(entry_term.size()));
     }
   }
 };

@@ -181,7 +181,8 @@ ceres::ResidualBlockId ProblemBuilder::add_residual(ceres::CostFunction* cost,
 ceres::ResidualBlockId ProblemBuilder::add_block(ceres::CostFunction* cost, ceres::LossFunction* loss,
                                                  const std::vector<int>& blocks) {
   if (!blocks_in_ceres_) {  // kept for the built-in solver
-    recorded_.push_back({std::unique_ptr<ceres::CostFunction>(cost), loss, blocks});
+    recorded_costs_.emplace_back(cost);
+    recorded_.push_back({cost, loss, blocks});
     return nullptr;
   }
   std::vector<double*> ptrs;
@@ -306,10 +307,7 @@ SolveSummary ProblemBuilder::solve_builtin(const SolveOptions& opt) {
   std::vector<BlockLMBlock> blocks;
   blocks.reserve(blocks_.size());
   for (const Block& b : blocks_) blocks.push_back({b.data, b.size, b.is_pose, b.fixed, b.eliminate});
-  std::vector<BlockLMResidual> residuals;
-  residuals.reserve(recorded_.size());
-  for (const Recorded& r : recorded_) residuals.push_back({r.cost.get(), r.loss, r.blocks});
-  return solve_block_lm(blocks, residuals, builtin_options(opt));
+  return solve_block_lm(blocks, recorded_, builtin_options(opt));
 }
 
 }  // namespace twistslam::optim::detail

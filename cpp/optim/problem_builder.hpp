@@ -26,6 +26,7 @@
 
 #include "geometry/stereo_camera.hpp"
 #include "geometry/types.hpp"
+#include "optim/block_lm.hpp"
 #include "optim/bundle_adjustment.hpp"
 #include "optim/schur_lm.hpp"
 
@@ -196,12 +197,10 @@ class ProblemBuilder {
   std::map<double, std::unique_ptr<ceres::LossFunction>> losses_;
   std::vector<std::pair<ceres::ResidualBlockId, double>> gated_;
   bool blocks_in_ceres_ = true;
-  struct Recorded {
-    std::unique_ptr<ceres::CostFunction> cost;
-    ceres::LossFunction* loss;  // one of losses_
-    std::vector<int> blocks;
-  };
-  std::vector<Recorded> recorded_;
+  // the residuals kept for the built-in solver (keep_blocks_out_of_ceres), handed to it as
+  // they are; the builder owns their cost functions
+  std::vector<std::unique_ptr<ceres::CostFunction>> recorded_costs_;
+  std::vector<BlockLMResidual> recorded_;
 };
 
 }  // namespace twistslam::optim::detail
