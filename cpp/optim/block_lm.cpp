@@ -110,12 +110,7 @@ SchurLMSummary solve_block_lm(const std::vector<BlockLMBlock>& blocks,
     std::copy(blocks[b].data, blocks[b].data + blocks[b].size, x.begin() + p.offset[b]);
   Linearization lin(p);
   double cost = evaluate(p, x, &lin);
-  if (!std::isfinite(cost)) {
-    out.message = "the initial state cannot be evaluated";
-    return out;
-  }
-  out.initial_cost = cost;
-  out.iterations = 1;
+  if (!begin_solve(cost, &out)) return out;
   const int N = p.num_columns, NP = p.num_points;
   if (N == 0 && NP == 0) {
     out.usable = true;

@@ -45,6 +45,18 @@ struct LMRadius {
   bool too_small() const { return radius < kLMMinRadius; }
 };
 
+// A solve's start from the initial state's cost: its summary's initial cost and first
+// iteration, or false (the summary says why) when that state cannot be evaluated
+inline bool begin_solve(double initial_cost, SchurLMSummary* out) {
+  if (!std::isfinite(initial_cost)) {
+    out->message = "the initial state cannot be evaluated";
+    return false;
+  }
+  out->initial_cost = initial_cost;
+  out->iterations = 1;
+  return true;
+}
+
 // One solve's step decisions, in Ceres' order: an invalid step (no model decrease) shrinks
 // the region, five in a row fail the solve; a step too short for the parameter tolerance or
 // changing the cost by less than the function tolerance ends it without being taken or

@@ -117,12 +117,7 @@ SchurLMSummary SchurLM::solve(const SchurLMOptions& options) {
 
   Linearization lin;
   double cost = evaluate(xp, xq, &lin);
-  if (!std::isfinite(cost)) {
-    out.message = "the initial state cannot be evaluated";
-    return out;
-  }
-  out.initial_cost = cost;
-  out.iterations = 1;
+  if (!begin_solve(cost, &out)) return out;
 
   const int FP = num_free_poses_, FQ = num_free_points_;
   if (FP == 0 && FQ == 0) {  // as Ceres: nothing to move, the state is the solution

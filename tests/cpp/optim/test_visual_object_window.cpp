@@ -13,6 +13,7 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <utility>
 #include <stdexcept>
 #include <vector>
 
@@ -104,6 +105,16 @@ TEST(VisualObjectWindow, HeadingTermRemovesTheYawDriftOfACarSeenFromBehind) {
         << "frame " << f;
 }
 
+// The same window solved by Ceres (`ceres`) and by the built-in solver (`builtin`), in place;
+// their summaries in that order
+std::pair<VisualObjectWindowSummary, VisualObjectWindowSummary> solve_with_both(
+    VisualObjectWindow& ceres, VisualObjectWindow& builtin, const Mat6& Pi, VisualObjectWindowOptions o) {
+  o.builtin_solver = false;
+  const VisualObjectWindowSummary a = refine_visual_object_window(test_scenes::kitti_camera(), ceres, Pi, o);
+  o.builtin_solver = true;
+  return {a, refine_visual_object_window(test_scenes::kitti_camera(), builtin, Pi, o)};
+}
+
 // The built-in Levenberg-Marquardt (optim/block_lm.hpp, the default for windows) takes Ceres'
 // DENSE_SCHUR steps on the same residuals: e_dyna with its points eliminated, the link,
 // e_head, e_const, and boxes (e_det pose and twist, Huber) and registrations (e_reg).
@@ -132,10 +143,7 @@ TEST(VisualObjectWindow, TheBuiltinSolverFollowsCeresDenseSchur) {
     o.max_iterations = 20;
     o.function_tolerance = 1e-10;
     VisualObjectWindow ceres = scene.window, builtin = scene.window;
-    o.builtin_solver = false;
-    const VisualObjectWindowSummary a = refine_visual_object_window(test_scenes::kitti_camera(), ceres, Pi, o);
-    o.builtin_solver = true;
-    const VisualObjectWindowSummary b = refine_visual_object_window(test_scenes::kitti_camera(), builtin, Pi, o);
+    const auto [a, b] = solve_with_both(ceres, builtin, Pi, o);
     ASSERT_TRUE(a.usable && b.usable);
     EXPECT_EQ(b.num_residuals, a.num_residuals);
     EXPECT_EQ(b.iterations, a.iterations);
@@ -182,10 +190,7 @@ TEST(VisualObjectWindow, TheBuiltinSolverFollowsCeresOnMonoRowsFixedPointsAndAGa
     o.function_tolerance = 1e-10;
     c.set(scene.window, o);
     VisualObjectWindow ceres = scene.window, builtin = scene.window;
-    o.builtin_solver = false;
-    const VisualObjectWindowSummary a = refine_visual_object_window(test_scenes::kitti_camera(), ceres, Pi, o);
-    o.builtin_solver = true;
-    const VisualObjectWindowSummary b = refine_visual_object_window(test_scenes::kitti_camera(), builtin, Pi, o);
+    const auto [a, b] = solve_with_both(ceres, builtin, Pi, o);
     ASSERT_TRUE(a.usable && b.usable);
     EXPECT_EQ(b.iterations, a.iterations);
     EXPECT_GT(b.iterations, 2);
