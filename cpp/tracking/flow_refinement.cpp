@@ -25,6 +25,16 @@ LkPyramids build_lk_pyramids(const cv::Mat& previous, const cv::Mat& current) {
   return out;
 }
 
+LkPyramids build_lk_pyramids(const std::vector<cv::Mat>& previous_pyramid, const cv::Mat& current) {
+  if (previous_pyramid.empty() || current.type() != CV_8UC1 ||
+      previous_pyramid[0].size() != current.size())
+    throw std::invalid_argument("Lucas-Kanade: expected a pyramid and an 8-bit gray image of one size");
+  LkPyramids out;
+  out.previous = previous_pyramid;
+  cv::buildOpticalFlowPyramid(current, out.current, cv::Size(kLkWindowPx, kLkWindowPx), kLkLevels);
+  return out;
+}
+
 std::vector<char> refine_flow_pixels(const LkPyramids& pyramids, const std::vector<Vec2>& from,
                                      std::vector<Vec2>* to, double max_px) {
   if (!to || to->size() != from.size())

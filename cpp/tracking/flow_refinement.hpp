@@ -21,6 +21,9 @@ struct LkPyramids {
 
 // previous, current: 8-bit gray images of one size; throws std::invalid_argument otherwise.
 LkPyramids build_lk_pyramids(const cv::Mat& previous, const cv::Mat& current);
+// The same with the previous image's pyramid already built (the last frame's current one,
+// as build_lk_pyramids made it): only the current image's is built.
+LkPyramids build_lk_pyramids(const std::vector<cv::Mat>& previous_pyramid, const cv::Mat& current);
 
 // Each pixel from[k] of the previous image, predicted at (*to)[k] in the current one, is
 // refined there by pyramidal Lucas-Kanade; kept[k] = 1 and (*to)[k] moved where it converged

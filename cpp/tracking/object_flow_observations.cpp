@@ -89,7 +89,10 @@ std::vector<ObjectTracker::FlowObservation> ObjectTracker::flow_observations(
   std::vector<char> kept(candidates.size(), 1);
   if (options_.flow_observations_lk_max_px > 0 && !gray_left_.empty() &&
       previous_gray_frame_ == last_frame_ && !previous_gray_left_.empty()) {
-    if (lk_pyramids_.empty()) lk_pyramids_ = build_lk_pyramids(previous_gray_left_, gray_left_);
+    if (lk_pyramids_.empty())
+      lk_pyramids_ = previous_lk_frame_ == last_frame_ && !previous_lk_pyramid_.empty()
+                         ? build_lk_pyramids(previous_lk_pyramid_, gray_left_)
+                         : build_lk_pyramids(previous_gray_left_, gray_left_);
     kept = refine_flow_pixels(lk_pyramids_, from, &to, options_.flow_observations_lk_max_px);
   }
   for (size_t k = 0; k < candidates.size(); ++k) {

@@ -44,6 +44,8 @@ void ObjectTracker::reset() {
   last_frame_ = -1;
   previous_gray_left_.release();
   previous_gray_frame_ = -1;
+  previous_lk_pyramid_.clear();
+  previous_lk_frame_ = -1;
 }
 
 bool ObjectTracker::update_cluster(int c, const Frame& frame, std::vector<Match> matches,
@@ -332,6 +334,11 @@ ObjectTrackingReport ObjectTracker::track(const Frame& input_frame, const cv::Ma
     gray_left_.copyTo(previous_gray_left_);
     previous_gray_frame_ = frame.index;
   }
+  // kept for the next frame unless its first level is a view of the caller's image
+  const bool keep_pyramid = !lk_pyramids_.empty() && previous_gray_frame_ == frame.index &&
+                            lk_pyramids_.current[0].datastart != gray_left_.datastart;
+  previous_lk_pyramid_ = keep_pyramid ? std::move(lk_pyramids_.current) : std::vector<cv::Mat>();
+  previous_lk_frame_ = keep_pyramid ? frame.index : -1;
   lk_pyramids_ = LkPyramids();
   // the caller's images are this call's only: no view of them outlives it
   gray_left_.release();

@@ -362,6 +362,10 @@ class ObjectTracker : public ObjectBundleTerms {
   int previous_gray_frame_ = -1;
   // during track(): the pyramids of the previous and current left images, built on first use
   mutable LkPyramids lk_pyramids_;
+  // the last frame's current pyramid (its frame index), the next frame's previous one: the
+  // same image's pyramid, not built twice
+  std::vector<cv::Mat> previous_lk_pyramid_;
+  int previous_lk_frame_ = -1;
   features::StereoSearchOptions search_;  // the flow-located points' SAD scan
   double instance_border_px_ = 0;       // during track(): the keypoints' instance border rule
   Vec4 road_plane_w_ = Vec4::Zero();    // its road plane (zero: none)

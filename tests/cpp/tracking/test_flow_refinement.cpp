@@ -63,6 +63,30 @@ TEST(FlowRefinement, ABiasedFlowIsBroughtBackOntoTheTrueMotion) {
   EXPECT_LT(errors[errors.size() * 95 / 100], 0.15);
 }
 
+// A frame's current pyramid is the next frame's previous one (ObjectTracker keeps it): the
+// pixels refined on the kept pyramid equal those refined on two freshly built ones, bit for
+// bit; a pyramid of another size is refused.
+TEST(FlowRefinement, TheLastFramesPyramidServesAsThePreviousOne) {
+  const Vec2 motion(1.7, 0.9);
+  const ShiftedPair first = textured_pair(0.0, 0.0), second = textured_pair(motion.x(), motion.y());
+  // frame 1 -> 2: `second.current`'s pyramid, built as frame 1's current one
+  const LkPyramids last = build_lk_pyramids(first.previous, second.previous);
+  const std::vector<Vec2> from = grid_pixels();
+  std::vector<Vec2> fresh_to, kept_to;
+  for (const Vec2& p : from) fresh_to.push_back(p + motion + Vec2(0.4, -0.3));
+  kept_to = fresh_to;
+  const std::vector<char> fresh =
+      refine_flow_pixels(build_lk_pyramids(second.previous, second.current), from, &fresh_to, 1.5);
+  const std::vector<char> kept =
+      refine_flow_pixels(build_lk_pyramids(last.current, second.current), from, &kept_to, 1.5);
+  EXPECT_EQ(kept, fresh);
+  EXPECT_EQ(kept_to, fresh_to);
+  EXPECT_GT(std::count(kept.begin(), kept.end(), 1), static_cast<long>(from.size()) * 9 / 10);
+  cv::Mat smaller;
+  cv::resize(second.current, smaller, cv::Size(), 0.5, 0.5);
+  EXPECT_THROW(build_lk_pyramids(last.current, smaller), std::invalid_argument);
+}
+
 TEST(FlowRefinement, APredictionFartherThanTheBoundOrNoTextureIsNotKept) {
   const Vec2 motion(2.3, -1.4);
   const ShiftedPair pair = textured_pair(motion.x(), motion.y());
