@@ -87,6 +87,9 @@ class DisOptions:
     patch_size_px: int = -1
     patch_stride_px: int = -1
     gradient_descent_iterations: int = -1
+    #: 0 skips the refinement (the preset's 5): measured on 24 simulated sequences (2026-12-07,
+    #: docs/visual_objects.md) a third less flow time (55 -> 35 ms), better error means, one
+    #: more ghost and no loop rate gained (the main thread bounds it): kept at the preset's
     variational_refinement_iterations: int = -1
     use_spatial_propagation: bool = True
     #: Given both frames' instance images (a run gives them), DIS runs only on the box around
