@@ -117,6 +117,12 @@ struct ObjectLidarOptions {
   bool far_lidar_align_surface_floor = true;
   double far_lidar_align_surface_quantile = 0.1;
   double far_lidar_align_surface_margin = 0.01;  // ... less this fraction of the origin's depth
+  // the rows of a camera-only free-link track (a pedestrian, a cyclist) farther than
+  // far_lidar_align_free_min_depth_m move along their lines of sight each by its own ratio, the
+  // running median over far_lidar_align_free_window_rows rows around it (0: off): a thin body's
+  // drift grows row by row, which one track-wide ratio cannot undo (object_lidar_align.cpp)
+  int far_lidar_align_free_window_rows = 7;
+  double far_lidar_align_free_min_depth_m = 25.0;
   // point-extent boxes (Detection::point_extent) laid from their near end, the car's length
   // from this quantile of theirs (off: every box as an estimate, the median length)
   bool point_extent_lengths = false;
@@ -229,6 +235,8 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("far_lidar_align_surface_floor", o.far_lidar_align_surface_floor, 0, 1);
   visit("far_lidar_align_surface_quantile", o.far_lidar_align_surface_quantile, 0.0, 1.0);
   visit("far_lidar_align_surface_margin", o.far_lidar_align_surface_margin, 0.0, 1.0);
+  visit("far_lidar_align_free_window_rows", o.far_lidar_align_free_window_rows, 0, 1000000);
+  visit("far_lidar_align_free_min_depth_m", o.far_lidar_align_free_min_depth_m, 0.0, 1000.0);
   visit("point_extent_lengths", o.point_extent_lengths, 0, 1);
   visit("point_extent_length_quantile", o.point_extent_length_quantile, 0.0, 1.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);

@@ -243,9 +243,10 @@ class ObjectTracker : public ObjectBundleTerms {
   // At the end, on all its rows: the rows hidden online are reported again where the whole
   // track's medians no longer contradict it. Called by smooth_tracks.
   void retest_lidar_contradiction();
-  // The frame's far camera-only vehicle rows keep their instance's LiDAR returns
-  // (far_lidar_returns), and at the end each such track's far rows move along their lines of
-  // sight to the returns' depth (lidar_objects.far_lidar_align_*; object_lidar_align.cpp).
+  // The frame's far camera-only rows keep their instance's LiDAR returns (far_lidar_returns),
+  // and at the end each such track's far rows move along their lines of sight to the returns'
+  // depth: a vehicle's by one track-wide ratio, a free-link track's each by the running median
+  // of its rows' ratios (lidar_objects.far_lidar_align_*; object_lidar_align.cpp).
   void keep_far_lidar_returns(const Frame& frame);
   void align_far_rows_to_lidar(const std::map<int, Mat4>& T_c_w_of_frame);
   // After the final smoothing: camera-only vehicle tracks' rows turn at most as far as they

@@ -338,6 +338,21 @@ class LidarObjectsConfig:
         "urban s11's car 11: aligned ATE 0.03 -> 0.10 and 0.10 -> 0.19 m). With it, on 42 "
         "sequences, only urban s26 (its two ghosts gone) and urban s5's car 0 changed",
         "fraction", lo=0.0, hi=1.0)
+    far_lidar_align_free_window_rows: int = param(
+        7, "the final rows of a camera-only free-link track (a pedestrian, a cyclist) farther "
+        "than far_lidar_align_free_min_depth_m move along their lines of sight each by its own "
+        "ratio of the returns' depth over its points' (as the vehicles' rows, within "
+        "far_lidar_align_max_ratio of 1), the running median over this many rows around it: a "
+        "far pedestrian's track drifts row by row (urban s24's DIS ghost 18, standing at 41-25 m "
+        "and tracked as walking away, its row ratios 1.01 -> 0.91), which one track-wide ratio "
+        "cannot undo, and single rows meet occluders' returns on a thin mask (one row at a time "
+        "moved 4 good rows off their pedestrians on urban s24 / s26 / s29; 7 rows none). 0: off. "
+        "Measured: docs/visual_objects.md, 'Far pedestrian rows at their returns' depth'",
+        "rows", lo=0, hi=1000000)
+    far_lidar_align_free_min_depth_m: float = param(
+        25.0, "... from this depth on: a pedestrian's 0.3-0.6 m body gives its track a stereo "
+        "depth good to a few per cent up to ~25 m (its tracks' medians within 0.4 m of their "
+        "returns there on 24 sequences), beyond which they reach 1-3 m", "m", lo=0.0, hi=1000.0)
     point_extent_lengths: bool = param(
         False, "boxes that are the tight extent of their points (Detections3D.point_extent, "
         "the classical detector) are laid from their end nearer the sensor, the car's length "

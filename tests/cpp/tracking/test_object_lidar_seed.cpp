@@ -340,3 +340,61 @@ TEST_F(LidarSeed, FarRowsMoveToTheirReturnsDepthAtTheEnd) {
       }
     }
 }
+
+// A far camera-only track on the free link (every link free: planar_class_ids empty; a
+// pedestrian's, a cyclist's), its stereo depths biased by a fraction that grows row by row (a far
+// track drifting along its line of sight, as urban s24's pedestrian ghost 18), or 5 % long in
+// every row. At the end each row beyond far_lidar_align_free_min_depth_m moves by the running
+// median of its own and its neighbours' ratios: every row's error shrinks, the last rows' most
+// (one track-wide ratio would over-correct the first and under-correct the last). With the
+// window 0 the rows stay where the stereo put them, and a car at 20 m (nearer than the bound)
+// is not moved.
+TEST_F(LidarSeed, FarFreeLinkRowsMoveEachToItsOwnReturnsDepth) {
+  struct Case {
+    double z0, drift_per_row, bias;  // m, stereo depth scale 1 + bias + drift_per_row * row
+  };
+  for (const Case c : {Case{40.0, 0.008, 0.0}, Case{40.0, 0.0, 0.05}, Case{20.0, 0.0, 0.05}}) {
+    std::vector<double> depth[2];  // per row, window off / on
+    car = make_car(rng, Vec3(-2, 0.5, c.z0), Vec3(0.3, 0, 0.1), 0.0);
+    for (const bool align : {false, true}) {
+      tracking::ObjectTrackingOptions options;
+      options.planar_class_ids = {};
+      tracking::ObjectLidarOptions lidar;
+      lidar.far_lidar_align_min_depth_m = 0;  // the vehicles' alignment: not this track's
+      if (!align) lidar.far_lidar_align_free_window_rows = 0;
+      auto tracker = make_tracker(options, lidar);
+      int row = 0;
+      run(tracker, 10, [&](SceneFrame& f) { f.stereo_depth_scale = 1.0 + c.bias + c.drift_per_row * row++; });
+      ASSERT_EQ(tracker.tracks().size(), 1u) << c.z0;
+      ASSERT_NE(tracker.tracks()[0].link, geometry::LinkType::kPlanar);
+      std::map<int, Mat4> T_c_w_of_frame;
+      for (int i = 0; i < 10; ++i) T_c_w_of_frame[i] = Mat4::Identity();
+      tracker.smooth_tracks(T_c_w_of_frame);
+      const objects::ObjectTrack& track = tracker.tracks()[0];
+      ASSERT_EQ(track.frames.size(), 10u);
+      for (const objects::TrackFrame& r : track.frames) {
+        EXPECT_TRUE(r.reported) << c.z0 << " " << align;
+        depth[align].push_back(r.T_w_o(2, 3));
+      }
+    }
+    for (int i = 0; i < 10; ++i) {
+      const double truth = car.pose(i)(2, 3), stereo_error = depth[0][i] - truth;
+      const double bias = c.bias + c.drift_per_row * i;
+      if (c.z0 < 25.0) {
+        EXPECT_DOUBLE_EQ(depth[1][i], depth[0][i]) << "row " << i << ": nearer than the bound";
+        continue;
+      }
+      if (bias < 0.03) continue;  // the first rows of the drift: their error is the points' spread
+      EXPECT_GT(stereo_error, 0.4 * bias * truth) << "row " << i << ": the bias is there";
+      EXPECT_LT(std::abs(depth[1][i] - truth), 0.6 * stereo_error)
+          << c.drift_per_row << " row " << i << ": stereo " << depth[0][i] << ", aligned " << depth[1][i]
+          << ", truth " << truth;
+    }
+    if (c.drift_per_row > 0) {  // each row by its own ratio: the drift itself goes, not only its mean
+      auto error = [&](int side, int i) { return depth[side][i] - car.pose(i)(2, 3); };
+      EXPECT_LT(std::abs(error(1, 9) - error(1, 4)), 0.5 * (error(0, 9) - error(0, 4)))
+          << "aligned errors " << error(1, 4) << " .. " << error(1, 9) << ", stereo " << error(0, 4) << " .. "
+          << error(0, 9);
+    }
+  }
+}
