@@ -104,6 +104,12 @@ double far_surface_floor(const objects::ObjectTrack& track, const std::map<int, 
   return floors.empty() ? 0.0 : median_value(floors);
 }
 
+double far_align_scale(double ratio, double floor, bool lift, double max_ratio) {
+  if (!(floor > 0)) return ratio;
+  if (lift) return std::max(ratio, std::min(floor, 1.0 + max_ratio));
+  return ratio < 1.0 ? std::min(1.0, std::max(ratio, floor)) : ratio;
+}
+
 namespace {
 // One row's median, over the cluster's points with returns around them, of the returns' depth
 // over the point's; NaN with fewer than min_points such points or beyond max_ratio of 1 (an
@@ -189,13 +195,14 @@ void ObjectTracker::align_far_rows_to_lidar(const std::map<int, Mat4>& T_c_w_of_
     }
     if (static_cast<int>(row_ratios.size()) < o.far_lidar_align_min_rows) continue;
     double ratio = median_value(row_ratios);
-    if (ratio < 1.0 && o.far_lidar_align_surface_floor) {
-      // nearer, but not past the face its returns measure, less the margin (a ratio: the margin
-      // is that fraction of the origin's depth)
-      const double lowest = far_surface_floor(track, T_c_w_of_frame, o.far_lidar_align_min_depth_m,
-                                              o.far_lidar_align_surface_quantile) -
-                            o.far_lidar_align_surface_margin;
-      ratio = std::min(1.0, std::max(ratio, lowest));
+    if (o.far_lidar_align_surface_floor) {
+      // not in front of the face its returns measure, less the margin (a ratio: the margin is
+      // that fraction of the origin's depth)
+      const double floor = far_surface_floor(track, T_c_w_of_frame, o.far_lidar_align_min_depth_m,
+                                             o.far_lidar_align_surface_quantile);
+      if (floor > 0)
+        ratio = far_align_scale(ratio, floor - o.far_lidar_align_surface_margin, o.far_lidar_align_surface_lift,
+                                o.far_lidar_align_max_ratio);
     }
     for (objects::TrackFrame& row : track.frames) {
       const auto pose = T_c_w_of_frame.find(row.frame);

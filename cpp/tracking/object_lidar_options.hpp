@@ -117,6 +117,9 @@ struct ObjectLidarOptions {
   bool far_lidar_align_surface_floor = true;
   double far_lidar_align_surface_quantile = 0.1;
   double far_lidar_align_surface_margin = 0.01;  // ... less this fraction of the origin's depth
+  // ... and an origin already in front of that face moves onto it (by at most
+  // far_lidar_align_max_ratio; tracking/object_lidar_align.hpp, far_align_scale)
+  bool far_lidar_align_surface_lift = true;
   // the rows of a camera-only free-link track (a pedestrian, a cyclist) farther than
   // far_lidar_align_free_min_depth_m move along their lines of sight each by its own ratio, the
   // running median over far_lidar_align_free_window_rows rows around it (0: off): a thin body's
@@ -235,6 +238,7 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("far_lidar_align_surface_floor", o.far_lidar_align_surface_floor, 0, 1);
   visit("far_lidar_align_surface_quantile", o.far_lidar_align_surface_quantile, 0.0, 1.0);
   visit("far_lidar_align_surface_margin", o.far_lidar_align_surface_margin, 0.0, 1.0);
+  visit("far_lidar_align_surface_lift", o.far_lidar_align_surface_lift, 0, 1);
   visit("far_lidar_align_free_window_rows", o.far_lidar_align_free_window_rows, 0, 1000000);
   visit("far_lidar_align_free_min_depth_m", o.far_lidar_align_free_min_depth_m, 0.0, 1000.0);
   visit("point_extent_lengths", o.point_extent_lengths, 0, 1);

@@ -83,5 +83,27 @@ TEST(FarSurfaceFloor, DepthIsTakenInEachRowsCameraFrame) {
   EXPECT_NEAR(tracking::far_surface_floor(track, T_c_w, 30.0, 0.5), 52.0 / 50.0, 1e-12);
 }
 
+// The scale from the rows' median ratio and the floor (far_align_scale). Urban s19's track 21:
+// its points 1.6 % beyond their returns (ratio 0.984) and its origin 2.1 % in front of the face
+// they measure (floor 1.021 less the margin): the origin moves onto the face, not nearer.
+TEST(FarAlignScale, AnOriginInFrontOfItsFaceMovesOntoIt) {
+  EXPECT_DOUBLE_EQ(tracking::far_align_scale(0.984, 1.011, true, 0.15), 1.011);
+  EXPECT_DOUBLE_EQ(tracking::far_align_scale(1.005, 1.011, true, 0.15), 1.011) << "farther than the ratio says";
+  EXPECT_DOUBLE_EQ(tracking::far_align_scale(1.030, 1.011, true, 0.15), 1.030) << "the ratio goes farther still";
+  EXPECT_DOUBLE_EQ(tracking::far_align_scale(0.984, 1.40, true, 0.15), 1.15) << "at most max_ratio";
+  // without the lift a nearer move stops at the face, no further (as before the lift)
+  EXPECT_DOUBLE_EQ(tracking::far_align_scale(0.984, 1.011, false, 0.15), 1.0);
+  EXPECT_DOUBLE_EQ(tracking::far_align_scale(1.005, 1.011, false, 0.15), 1.005);
+}
+
+TEST(FarAlignScale, ANearerMoveStopsAtTheFace) {
+  for (const bool lift : {true, false}) {
+    EXPECT_DOUBLE_EQ(tracking::far_align_scale(0.95, 0.97, lift, 0.15), 0.97) << lift;
+    EXPECT_DOUBLE_EQ(tracking::far_align_scale(0.95, 0.90, lift, 0.15), 0.95) << lift << ": the face is nearer";
+    EXPECT_DOUBLE_EQ(tracking::far_align_scale(0.95, 0.0, lift, 0.15), 0.95) << lift << ": no floor";
+    EXPECT_DOUBLE_EQ(tracking::far_align_scale(1.04, 0.0, lift, 0.15), 1.04) << lift << ": no floor";
+  }
+}
+
 }  // namespace
 }  // namespace twistslam
