@@ -124,3 +124,16 @@ def test_building_meshes_index_their_own_vertices():
     # four wall quads and a roof quad per building: 8 + 2 triangles on 16 + 4 vertices
     walls, roofs = (world.static_scene.mesh_of_group[GROUP[g]] for g in ("wall", "roof"))
     assert len(walls.faces) * 2 == len(walls.vertices) and len(roofs.faces) * 2 == len(roofs.vertices)
+
+
+def test_flow_png_of_pixels_without_a_surface_is_zero_and_quiet():
+    # sky pixels hit nothing: their flow is NaN, which must neither warn nor reach the PNG
+    fl = np.array([[[1.5, -2.0], [np.nan, np.nan]], [[np.inf, -np.inf], [0.25, 0.0]]])
+    valid = np.array([[True, False], [False, True]])
+    with np.errstate(all="raise"):
+        out = extras.encode_flow(fl, valid)
+    assert out.dtype == np.uint16 and out.shape == (2, 2, 3)
+    np.testing.assert_array_equal(out[..., 2], valid.astype(np.uint16))
+    assert (out[~valid] == 0).all()
+    np.testing.assert_array_equal(out[0, 0, :2], np.rint(np.array([1.5, -2.0]) * extras.FLOW_SCALE + 2**15))
+    np.testing.assert_array_equal(out[1, 1, :2], np.rint(np.array([0.25, 0.0]) * extras.FLOW_SCALE + 2**15))

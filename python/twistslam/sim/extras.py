@@ -65,7 +65,8 @@ def flow(world: World, camera: Camera, hits: Hits, n: int, next_objects: MovingO
         agents, which = np.flatnonzero(present), (np.cumsum(present) - 1)[a]
         T_rel = world.traj.T_m_o[agents, n + 1] @ np.linalg.inv(world.traj.T_m_o[agents, n])
         X[obj] = np.einsum("nij,nj->ni", T_rel[which, :3, :3], X[obj]) + T_rel[which, :3, 3]
-    uv1, z1 = camera.project_map(X, world.T_m_c[n + 1])
+    with np.errstate(divide="ignore", invalid="ignore"):  # sky pixels (no hit): not valid below
+        uv1, z1 = camera.project_map(X, world.T_m_c[n + 1])
     fl = uv1 - camera.pixel_centres()
     valid_occ = hit & (z1 > 0.1)
     inside = (uv1[:, 0] > -0.5) & (uv1[:, 0] < W - 0.5) & (uv1[:, 1] > -0.5) & (uv1[:, 1] < H - 0.5)
@@ -130,7 +131,8 @@ def _hidden(world: World, camera: Camera, m: int, objects: MovingObjects, hits_m
 
 def encode_flow(fl: np.ndarray, valid: np.ndarray) -> np.ndarray:
     """KITTI flow PNG channels (H, W, 3) uint16: u*64+2^15, v*64+2^15, valid."""
-    v = np.clip(np.rint(fl * FLOW_SCALE + 2**15), 0, 2**16 - 1).astype(np.uint16)
+    # NaN where nothing was hit (sky): such pixels are never valid, and zeroed below
+    v = np.clip(np.rint(np.where(valid[..., None], fl, 0.0) * FLOW_SCALE + 2**15), 0, 2**16 - 1).astype(np.uint16)
     out = np.dstack([v, valid.astype(np.uint16)])
     out[~valid, :2] = 0
     return out
