@@ -8,6 +8,7 @@
 // are known, otherwise each frame's own camera frame (T_w_c = I), as AB3DMOT tracks.
 // The twist xi of frame i links it to frame i + 1 (paper eq. 2, left-multiplied in w):
 //   T_w_o(i+1) = exp(Pi xi_i) T_w_o(i).
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,11 @@ struct TrackFrame {
   // depth m), to scale the final rows' depth to them (tracking/object_lidar_align.cpp);
   // empty otherwise
   Points3 far_lidar_returns;
+  // a nearer camera-only vehicle row: the depth (m, camera frame) of the face its instance
+  // mask's LiDAR returns measured then (ObjectLidarOptions::far_lidar_align_surface_quantile of
+  // their depths), to lift an origin left in front of it at the end
+  // (tracking/object_lidar_align.cpp, lift_near_rows_onto_their_face); NaN otherwise
+  double lidar_face_depth_m = std::numeric_limits<double>::quiet_NaN();
   // LiDAR registration (eq. 6-7): the object's motion in w from the previous frame to this
   // one, T_w_o(this) = M_w_registered T_w_o(previous), measured by GICP of the object scans
   bool registered = false;

@@ -2,6 +2,7 @@
 // The far rows' alignment to the LiDAR (object_lidar_align.cpp; ObjectTracker's
 // align_far_rows_to_lidar runs it): the part that is a plain function of one track.
 #include <map>
+#include <vector>
 
 #include "geometry/types.hpp"
 #include "objects/object_track.hpp"
@@ -25,5 +26,10 @@ double far_surface_floor(const objects::ObjectTrack& track, const std::map<int, 
 // smoothing moves them: urban s19's track 21 (a parked car at 47-39 m, 2 m in front of its face
 // after the smoothing while its points lay 1.6 % beyond the returns, a ghost).
 double far_align_scale(double ratio, double floor, bool lift, double max_ratio);
+
+// Per value, the median of the finite values among the `window` around it (window / 2 on each
+// side, fewer at the ends; window <= 1: the value itself); NaN where none is finite. A far
+// free-link track's rows move by these medians of their ratios (align_free_track_rows).
+std::vector<double> running_median(const std::vector<double>& values, int window);
 
 }  // namespace twistslam::tracking

@@ -120,12 +120,23 @@ struct ObjectLidarOptions {
   // ... and an origin already in front of that face moves onto it (by at most
   // far_lidar_align_max_ratio; tracking/object_lidar_align.hpp, far_align_scale)
   bool far_lidar_align_surface_lift = true;
+  // ... and a camera-only vehicle row nearer than far_lidar_align_min_depth_m whose origin lies
+  // in front of the face its own mask's returns measured (the same quantile, less the margin)
+  // moves onto it, by at most far_lidar_align_max_ratio: row by row, since near rows have
+  // returns enough (object_lidar_align.cpp, lift_near_rows_onto_their_face)
+  bool near_lidar_surface_lift = true;
+  int near_lidar_surface_window_rows = 7;  // ... the running median of this many rows' floors
   // the rows of a camera-only free-link track (a pedestrian, a cyclist) farther than
   // far_lidar_align_free_min_depth_m move along their lines of sight each by its own ratio, the
   // running median over far_lidar_align_free_window_rows rows around it (0: off): a thin body's
   // drift grows row by row, which one track-wide ratio cannot undo (object_lidar_align.cpp)
   int far_lidar_align_free_window_rows = 7;
   double far_lidar_align_free_min_depth_m = 25.0;
+  // ... each row's ratio is its mask's returns' median depth over its origin's depth (off: its
+  // points' against the returns around them, as the vehicles'), and a row whose running median
+  // lies beyond far_lidar_align_max_ratio of 1 is not reported (off: it stays where it is)
+  bool far_lidar_align_free_from_origin = true;
+  bool far_lidar_align_free_hide_beyond = true;
   // point-extent boxes (Detection::point_extent) laid from their near end, the car's length
   // from this quantile of theirs (off: every box as an estimate, the median length)
   bool point_extent_lengths = false;
@@ -239,8 +250,12 @@ void for_each_option(ObjectLidarOptions& o, Visit&& visit) {
   visit("far_lidar_align_surface_quantile", o.far_lidar_align_surface_quantile, 0.0, 1.0);
   visit("far_lidar_align_surface_margin", o.far_lidar_align_surface_margin, 0.0, 1.0);
   visit("far_lidar_align_surface_lift", o.far_lidar_align_surface_lift, 0, 1);
+  visit("near_lidar_surface_lift", o.near_lidar_surface_lift, 0, 1);
+  visit("near_lidar_surface_window_rows", o.near_lidar_surface_window_rows, 1, 1000000);
   visit("far_lidar_align_free_window_rows", o.far_lidar_align_free_window_rows, 0, 1000000);
   visit("far_lidar_align_free_min_depth_m", o.far_lidar_align_free_min_depth_m, 0.0, 1000.0);
+  visit("far_lidar_align_free_from_origin", o.far_lidar_align_free_from_origin, 0, 1);
+  visit("far_lidar_align_free_hide_beyond", o.far_lidar_align_free_hide_beyond, 0, 1);
   visit("point_extent_lengths", o.point_extent_lengths, 0, 1);
   visit("point_extent_length_quantile", o.point_extent_length_quantile, 0.0, 1.0);
   visit("use_detection_twist", o.use_detection_twist, 0, 1);

@@ -346,6 +346,20 @@ class LidarObjectsConfig:
         "of its face, a ghost). Measured (2026-12-07) on 39 simulated sequences x 2 flows: "
         "that ghost gone, every other line identical (docs/visual_objects.md, 'An origin in "
         "front of its returns' face')")
+    near_lidar_surface_lift: bool = param(
+        True, "a camera-only vehicle row nearer than far_lidar_align_min_depth_m whose origin "
+        "lies in front of the face its own mask's returns measured then "
+        "(far_lidar_align_surface_quantile of their depths, less far_lidar_align_surface_margin) "
+        "moves onto it at the end, by at most far_lidar_align_max_ratio (not where the mask "
+        "reaches the image's side or bottom border: the part in view need not hold the car's "
+        "nearest faces; urban s35's car 8 passing the camera at 5-8 m). Crowded s21's DIS ghost 27, on a car seen "
+        "between two nearer ones, started 2.2 m in front of its rear at 15.7 m and reached it "
+        "over 20 frames: too little for the LiDAR check's track medians (0.9 m). Measured: "
+        "docs/visual_objects.md, 'A near origin in front of its returns' face'")
+    near_lidar_surface_window_rows: int = param(
+        7, "... each row's floor (its face over its origin's depth) is the running median of "
+        "this many rows' around it, as the free-link rows' ratios (a row whose mask's returns "
+        "meet an occluder's edge does not move alone). 1: each row by its own", "rows", lo=1, hi=1000000)
     far_lidar_align_free_window_rows: int = param(
         7, "the final rows of a camera-only free-link track (a pedestrian, a cyclist) farther "
         "than far_lidar_align_free_min_depth_m move along their lines of sight each by its own "
@@ -361,6 +375,18 @@ class LidarObjectsConfig:
         25.0, "... from this depth on: a pedestrian's 0.3-0.6 m body gives its track a stereo "
         "depth good to a few per cent up to ~25 m (its tracks' medians within 0.4 m of their "
         "returns there on 24 sequences), beyond which they reach 1-3 m", "m", lo=0.0, hi=1000.0)
+    far_lidar_align_free_from_origin: bool = param(
+        True, "... each such row's ratio is the median depth of the returns on its mask over its "
+        "origin's depth, not its points' against the returns around them: a far pedestrian "
+        "cluster gathers points metres before and behind its body, and its origin need not lie "
+        "where its points meet the returns (urban s35's track 54: 58 points over 6.6 m, the "
+        "points with returns at the returns' depth, the origin 1.2-2 m in front, a ghost). "
+        "Measured: docs/visual_objects.md, 'A far pedestrian's origin against its returns'")
+    far_lidar_align_free_hide_beyond: bool = param(
+        True, "... and a row whose running median ratio lies beyond far_lidar_align_max_ratio "
+        "of 1 is not reported (it cannot be moved there: the returns contradict it). Urban "
+        "s34's track 35, a pedestrian standing at 46-41 m reported at 35-28 m (running "
+        "medians 1.27-1.38), a ghost")
     point_extent_lengths: bool = param(
         False, "boxes that are the tight extent of their points (Detections3D.point_extent, "
         "the classical detector) are laid from their end nearer the sensor, the car's length "

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <vector>
 
@@ -103,6 +104,28 @@ TEST(FarAlignScale, ANearerMoveStopsAtTheFace) {
     EXPECT_DOUBLE_EQ(tracking::far_align_scale(0.95, 0.0, lift, 0.15), 0.95) << lift << ": no floor";
     EXPECT_DOUBLE_EQ(tracking::far_align_scale(1.04, 0.0, lift, 0.15), 1.04) << lift << ": no floor";
   }
+}
+
+// The running median a far free-link track's rows move by: a lone outlier row (an occluder's
+// returns) does not move its neighbours, NaN rows are skipped, the ends take the rows they have.
+TEST(RunningMedian, OutliersAndGapsDoNotMoveTheNeighbours) {
+  // of an even count, the upper middle value (detail::median_value)
+  const double nan = std::nan("");
+  const std::vector<double> ratios = {1.00, 1.01, 0.70, 1.02, nan, 1.03, 1.04};
+  const std::vector<double> m = tracking::running_median(ratios, 3);
+  ASSERT_EQ(m.size(), ratios.size());
+  EXPECT_EQ(m[0], 1.01) << "the first row and its one neighbour";
+  EXPECT_EQ(m[1], 1.00);
+  EXPECT_EQ(m[2], 1.01) << "the outlier takes its neighbours' ratio";
+  EXPECT_EQ(m[3], 1.02) << "0.70 and 1.02: the NaN beside it does not count";
+  EXPECT_EQ(m[4], 1.03) << "a NaN row gets its neighbours' median";
+  EXPECT_EQ(m[6], 1.04);
+  const std::vector<double> wide = tracking::running_median(ratios, 7);
+  EXPECT_EQ(wide[2], 1.01) << "rows 0-5 without the NaN: 0.70 1.00 1.01 1.02 1.03";
+  EXPECT_EQ(wide[6], 1.03) << "rows 3-6: 1.02 1.03 1.04";
+  EXPECT_EQ(tracking::running_median(ratios, 1)[2], 0.70) << "a window of one: the value";
+  EXPECT_TRUE(std::isnan(tracking::running_median({nan, nan}, 3)[0])) << "no finite value";
+  EXPECT_TRUE(tracking::running_median({}, 7).empty());
 }
 
 }  // namespace
