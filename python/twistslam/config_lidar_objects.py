@@ -358,8 +358,10 @@ class LidarObjectsConfig:
         "docs/visual_objects.md, 'A near origin in front of its returns' face'")
     near_lidar_surface_window_rows: int = param(
         7, "... each row's floor (its face over its origin's depth) is the running median of "
-        "this many rows' around it, as the free-link rows' ratios (a row whose mask's returns "
-        "meet an occluder's edge does not move alone). 1: each row by its own", "rows", lo=1, hi=1000000)
+        "this many rows' around it, as the free-link rows' ratios, so that a row whose mask's "
+        "returns meet an occluder's edge does not move alone. 1 (each row by its own) measured "
+        "the same on 47 simulated sequences: same cars and ghosts, no car's aligned ATE 1 cm "
+        "apart, RPE_t 0.0385 / 0.0414 against 0.0387 / 0.0416 m/m (files / DIS)", "rows", lo=1, hi=1000000)
     far_lidar_align_free_window_rows: int = param(
         7, "the final rows of a camera-only free-link track (a pedestrian, a cyclist) farther "
         "than far_lidar_align_free_min_depth_m move along their lines of sight each by its own "
