@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <utility>
 #include <vector>
 
 #include "tracking/object_lidar_align.hpp"
@@ -122,10 +123,7 @@ double far_surface_floor(const objects::ObjectTrack& track, const std::map<int, 
     std::vector<double> returns;
     for (Eigen::Index i = 0; i < row.far_lidar_returns.rows(); ++i)
       returns.push_back(row.far_lidar_returns(i, 2));
-    const auto at =
-        returns.begin() + static_cast<std::ptrdiff_t>(quantile * static_cast<double>(returns.size() - 1));
-    std::nth_element(returns.begin(), at, returns.end());
-    floors.push_back(*at / depth);
+    floors.push_back(quantile_value(std::move(returns), quantile) / depth);
   }
   return floors.empty() ? 0.0 : median_value(floors);
 }

@@ -122,8 +122,9 @@ struct ObjectLidarOptions {
   bool far_lidar_align_surface_lift = true;
   // ... and a camera-only vehicle row nearer than far_lidar_align_min_depth_m whose origin lies
   // in front of the face its own mask's returns measured (the same quantile, less the margin)
-  // moves onto it, by at most far_lidar_align_max_ratio: row by row, since near rows have
-  // returns enough (object_lidar_align.cpp, lift_near_rows_onto_their_face)
+  // moves onto it, by at most far_lidar_align_max_ratio; not where the mask reaches the image's
+  // border, and only rows with a face of their own (object_lidar_align.cpp,
+  // lift_near_rows_onto_their_face; off with far_lidar_align_min_depth_m 0)
   bool near_lidar_surface_lift = true;
   int near_lidar_surface_window_rows = 7;  // ... the running median of this many rows' floors
   // the rows of a camera-only free-link track (a pedestrian, a cyclist) farther than
