@@ -523,3 +523,56 @@ TEST_F(LidarSeed, FarFreeLinkRowsMoveEachToItsOwnReturnsDepth) {
     }
   }
 }
+
+// A far camera-only car at 45 m whose stereo depths lag further behind it row by row, 4 % more
+// each row (urban s40's DIS
+// ghost 29: a parked car at 60-45 m tracked as if it drove with the camera, its rows 0.1 m off
+// the returns on its mask at 55 m and 4.3 m beyond them at 50 m). The track-wide scale moves
+// every row by one ratio and leaves the last rows metres beyond the car; with
+// far_lidar_align_max_behind_m each row whose running median lies more than that beyond the
+// median depth of its mask's returns moves nearer by the excess. The first rows, within the
+// bound, stay where the track-wide scale put them.
+TEST_F(LidarSeed, FarVehicleRowsLaggingBehindTheirReturnsMoveNearer) {
+  car = make_car(rng, Vec3(-2, 0.5, 45.0), Vec3(0.3, 0, 0.1), 0.0);
+  const double max_behind_m = 1.5;
+  std::vector<double> depth[2];  // per row, the rule off / on
+  std::vector<double> returns_m;
+  for (const bool pull : {false, true}) {
+    tracking::ObjectLidarOptions lidar;
+    lidar.lidar_check_max_ratio = 0;  // every row is off by its own fraction: the check would hide them
+    lidar.far_lidar_align_max_behind_m = pull ? max_behind_m : 0.0;
+    auto tracker = make_tracker({}, lidar);
+    int row = 0;
+    run(tracker, 10, [&](SceneFrame& f) { f.stereo_depth_scale = 1.0 + 0.04 * row++; });
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    ASSERT_EQ(tracker.tracks()[0].link, geometry::LinkType::kPlanar);
+    smooth_at_origin(tracker, 10);
+    const objects::ObjectTrack& track = tracker.tracks()[0];
+    ASSERT_EQ(track.frames.size(), 10u);
+    for (const objects::TrackFrame& r : track.frames) {
+      EXPECT_TRUE(r.reported) << "row " << r.frame;
+      depth[pull].push_back(r.T_w_o(2, 3));
+      if (!pull) continue;
+      ASSERT_GT(r.far_lidar_returns.rows(), 0) << "row " << r.frame << " kept its returns";
+      std::vector<double> d;
+      for (Eigen::Index i = 0; i < r.far_lidar_returns.rows(); ++i) d.push_back(r.far_lidar_returns(i, 2));
+      std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+      returns_m.push_back(d[d.size() / 2]);
+    }
+  }
+  int lagging = 0;
+  for (int i = 0; i < 10; ++i) {
+    const double behind_before = depth[0][i] - returns_m[i], behind_after = depth[1][i] - returns_m[i];
+    if (behind_before <= max_behind_m) {
+      EXPECT_DOUBLE_EQ(depth[1][i], depth[0][i]) << "row " << i << ": within the bound";
+      continue;
+    }
+    ++lagging;
+    EXPECT_LT(depth[1][i], depth[0][i]) << "row " << i << " moved nearer";
+    // the running median of 7 rows trails a steady drift at the track's end by a row's step
+    EXPECT_LE(behind_after, max_behind_m + 0.9) << "row " << i << ": " << behind_before << " m behind before";
+    EXPECT_GE(behind_after, max_behind_m - 0.9) << "row " << i << ": not past the returns";
+  }
+  EXPECT_GE(lagging, 3) << "the last rows lag more than the bound behind the returns";
+  EXPECT_GT(depth[0][9] - returns_m[9], 2.5) << "the track-wide scale leaves the last row metres beyond";
+}
